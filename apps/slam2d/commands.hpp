@@ -1,0 +1,15 @@
+#pragma once
+// The slam2d subcommands. Each add_*_command registers its options on the app and the action
+// to run; actions throw slam2d::Error on bad input and main() turns that into a message and exit 1.
+
+#include <CLI/CLI.hpp>
+
+namespace slam2d::cli {
+
+void add_info_command(CLI::App& app);
+void add_simulate_command(CLI::App& app);
+void add_map_command(CLI::App& app);
+void add_eval_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
+
+}  // namespace slam2d::cli

@@ -1,0 +1,128 @@
+// slam2d info FILE: what a CARMEN log, a map (YAML) or a pose graph (g2o/TORO) holds.
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "commands.hpp"
+#include "json.hpp"
+#include "progress.hpp"
+#include "slam2d/core/angles.hpp"
+#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/map_io.hpp"
+#include "slam2d/io/pose_graph_io.hpp"
+
+namespace slam2d::cli {
+
+namespace {
+
+struct InfoOptions {
+  std::string path;
+  bool json = false;
+  bool quiet = false;
+};
+
+bool ends_with_any(const std::string& path, std::initializer_list<const char*> suffixes) {
+  return std::any_of(suffixes.begin(), suffixes.end(), [&](const char* s) { return path.ends_with(s); });
+}
+
+JsonObject log_info(const InfoOptions& options) {
+  CarmenReader reader(options.path);
+  Progress progress("info", options.quiet);
+  std::map<std::size_t, std::size_t> beam_counts;  // beams -> scans
+  std::map<std::string, std::size_t> laser_types;
+  std::size_t scans = 0;
+  double fov = 0.0, largest_reading = 0.0, range_max = 0.0;
+  std::optional<double> first_scan, last_scan;
+  while (auto message = reader.next()) {
+    if (const auto* laser = std::get_if<LaserMessage>(&*message)) {
+      ++scans;
+      ++beam_counts[laser->scan.size()];
+      ++laser_types[laser->type];
+      fov = std::max(fov, laser->field_of_view);
+      range_max = std::max(range_max, laser->scan.range_max);
+      for (double r : laser->scan.ranges) largest_reading = std::max(largest_reading, r);
+      if (!first_scan) first_scan = laser->scan.stamp;
+      last_scan = laser->scan.stamp;
+      if (scans % 1024 == 0) progress.update(reader.progress(), fmt::format("{} scans", scans));
+    }
+  }
+  progress.finish();
+  const CarmenStats& stats = reader.stats();
+  const double duration = scans > 0 ? *last_scan - *first_scan : 0.0;
+  const auto most_common = std::max_element(beam_counts.begin(), beam_counts.end(),
+                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+  JsonObject json;
+  json.add("file", options.path).add("kind", "carmen_log").add("scans", scans);
+  json.add("beams", beam_counts.empty() ? std::size_t{0} : most_common->first);
+  json.add("fov_deg", rad_to_deg(fov)).add("max_range", largest_reading).add("range_max", range_max);
+  json.add("rate_hz", duration > 0.0 ? std::optional<double>((scans - 1) / duration) : std::nullopt);
+  json.add("duration_s", duration).add("odom_messages", stats.odometry_messages);
+  json.add("true_pose_messages", stats.true_pose_messages);
+  json.add("backwards_timestamps", stats.backwards_laser_timestamps);
+  json.add("backwards_timestamps_all_messages", stats.backwards_timestamps);
+  json.add("skipped_lines", stats.skipped_lines);
+  JsonObject types;
+  for (const auto& [type, count] : laser_types) types.add(type, count);
+  json.add("laser_types", types);
+  JsonObject skipped;
+  for (const auto& [type, count] : stats.skipped_types) skipped.add(type, count);
+  json.add("skipped_types", skipped);
+  return json;
+}
+
+JsonObject map_info(const InfoOptions& options) {
+  const MapMetadata metadata = read_map_metadata(options.path);
+  const OccupancyMap map = read_map(options.path);
+  std::size_t occupied = 0, free = 0, unknown = 0;
+  for (const auto cell : map.cells) {
+    if (cell == OccupancyMap::kUnknown) ++unknown;
+    else if (cell >= 50) ++occupied;
+    else ++free;
+  }
+  JsonObject json;
+  json.add("file", options.path).add("kind", "map").add("image", metadata.image);
+  json.add("width", map.width).add("height", map.height).add("resolution", map.resolution);
+  json.add("size_x_m", map.width * map.resolution).add("size_y_m", map.height * map.resolution);
+  json.add("origin_x", map.origin.x()).add("origin_y", map.origin.y()).add("origin_yaw", map.origin.theta());
+  json.add("occupied_cells", occupied).add("free_cells", free).add("unknown_cells", unknown);
+  return json;
+}
+
+JsonObject graph_info(const InfoOptions& options) {
+  const PoseGraphFile graph = read_pose_graph(options.path);
+  JsonObject json;
+  json.add("file", options.path).add("kind", "pose_graph");
+  json.add("format", graph.format == PoseGraphFormat::kG2o ? "g2o" : "toro");
+  json.add("vertices", graph.vertices.size()).add("edges", graph.edges.size());
+  json.add("fixed", graph.fixed.size()).add("skipped_lines", graph.skipped_lines);
+  return json;
+}
+
+void run_info(const InfoOptions& options) {
+  JsonObject json;
+  if (ends_with_any(options.path, {".yaml", ".yml"})) {
+    json = map_info(options);
+  } else if (ends_with_any(options.path, {".g2o", ".g2o.gz", ".graph", ".graph.gz", ".toro"})) {
+    json = graph_info(options);
+  } else {
+    json = log_info(options);
+  }
+  std::fputs(options.json ? json.dump().c_str() : json.text().c_str(), stdout);
+}
+
+}  // namespace
+
+void add_info_command(CLI::App& app) {
+  auto options = std::make_shared<InfoOptions>();
+  CLI::App* command = app.add_subcommand("info", "Summarise a CARMEN log, a map (.yaml) or a pose graph (.g2o, .graph)");
+  command->add_option("file", options->path, "CARMEN log (plain or .gz), map YAML, or g2o/TORO graph")->required();
+  command->add_flag("--json", options->json, "Print a JSON summary");
+  command->add_flag("--quiet", options->quiet, "No progress line");
+  command->callback([options] { run_info(*options); });
+}
+
+}  // namespace slam2d::cli

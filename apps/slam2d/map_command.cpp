@@ -1,0 +1,29 @@
+// slam2d map LOG --method METHOD --out DIR: build a map and a trajectory from a log.
+
+#include <cstdio>
+
+#include "commands.hpp"
+#include "map_job.hpp"
+
+namespace slam2d::cli {
+
+void add_map_command(CLI::App& app) {
+  auto options = std::make_shared<MapJobOptions>();
+  auto json = std::make_shared<bool>(false);
+  CLI::App* command = app.add_subcommand("map", "Build an occupancy map and a trajectory from a CARMEN log");
+  command->add_option("log", options->log, "CARMEN log (plain or .gz)")->required();
+  command->add_option("--out", options->out_dir, "Output folder: map.pgm, map.yaml, map.png, trajectory.txt, summary.json")
+      ->required();
+  command->add_option("--method", options->method, "Mapping method")
+      ->check(CLI::IsMember(map_methods()))
+      ->capture_default_str();
+  command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
+  command->add_flag("--json", *json, "Print the summary as JSON");
+  command->add_flag("--quiet", options->quiet, "No progress line");
+  command->callback([options, json] {
+    const MapJobResult result = run_map_job(*options);
+    std::fputs(*json ? result.summary.dump().c_str() : result.summary.text().c_str(), stdout);
+  });
+}
+
+}  // namespace slam2d::cli

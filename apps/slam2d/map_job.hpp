@@ -1,0 +1,33 @@
+#pragma once
+// The mapping job behind `slam2d map` (and `slam2d demo`): read a log, estimate the trajectory
+// with the chosen method, build the occupancy grid, write the outputs.
+
+#include <string>
+
+#include "json.hpp"
+#include "slam2d/core/occupancy_map.hpp"
+#include "slam2d/core/trajectory.hpp"
+
+namespace slam2d::cli {
+
+struct MapJobOptions {
+  std::string log;                  // CARMEN log, plain or .gz
+  std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
+  std::string method = "odometry";  // odometry
+  double resolution = 0.05;         // m per cell
+  bool quiet = false;               // no progress line
+};
+
+struct MapJobResult {
+  OccupancyMap map;
+  Trajectory trajectory;  // one pose per scan used, in log order
+  JsonObject summary;     // what summary.json holds
+};
+
+/// Runs the job and writes its outputs; nothing is written if the log cannot be read to the end.
+MapJobResult run_map_job(const MapJobOptions& options);
+
+/// The methods `--method` accepts.
+const std::vector<std::string>& map_methods();
+
+}  // namespace slam2d::cli

@@ -1,0 +1,46 @@
+#pragma once
+// Relative pose error (RPE) of J. Sturm, N. Engelhard, F. Endres, W. Burgard, D. Cremers:
+// "A benchmark for the evaluation of RGB-D SLAM systems", IROS 2012, Sec. VI-B, Eq. (1)-(2), in
+// 2D, with the window measured either in time (as in the paper) or in travelled distance (as in
+// the KITTI odometry benchmark, Geiger et al. CVPR 2012).
+//
+// Poses are associated by stamp and ordered by stamp. For each associated pose i, j is the first
+// later pose at least `delta` further along; the error is
+// E_ij = (Ref_i^-1 Ref_j)^-1 (Est_i^-1 Est_j), summarised by |t(E)| (m) and |angle(E)| (deg).
+
+#include <cstddef>
+
+#include "slam2d/core/trajectory.hpp"
+
+namespace slam2d {
+
+enum class RpeWindow {
+  kDistance,  // delta is path length (m) along the associated reference poses
+  kTime,      // delta is a stamp difference (s)
+};
+
+struct RpeConfig {
+  RpeWindow window = RpeWindow::kDistance;  // how "further along" is measured
+  double delta = 1.0;                       // m (kDistance) or s (kTime), > 0: the window length
+  // s: each estimate pose is matched to the reference pose with the nearest stamp within this.
+  double stamp_tolerance = 0.001;
+};
+
+struct RpeStatistics {
+  double rmse = 0.0;
+  double mean = 0.0;
+  double max = 0.0;
+};
+
+struct RpeResult {
+  std::size_t matched = 0;     // associated pose pairs
+  std::size_t pairs = 0;       // (i, j) windows evaluated
+  RpeStatistics translation;   // m
+  RpeStatistics rotation_deg;  // deg
+};
+
+/// RPE of `estimate` against `reference`. Statistics are zero when no window fits (pairs == 0).
+/// Throws Error on delta <= 0 or non-finite, a bad tolerance or non-finite trajectory values.
+RpeResult relative_pose_error(const Trajectory& estimate, const Trajectory& reference, const RpeConfig& config = {});
+
+}  // namespace slam2d

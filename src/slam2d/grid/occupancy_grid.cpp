@@ -1,0 +1,188 @@
+#include "slam2d/grid/occupancy_grid.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <cmath>
+#include <string>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/grid/ray_casting.hpp"
+
+namespace slam2d {
+
+namespace {
+
+using CellGrid = TiledGrid<OccupancyCell>;
+
+void check_open_interval(double value, double low, double high, const char* name) {
+  check(value > low && value < high, std::string("OccupancyGridConfig: ") + name + " must lie in (" +
+                                         std::to_string(low) + ", " + std::to_string(high) + "), got " +
+                                         std::to_string(value));
+}
+
+void validate(const OccupancyGridConfig& config) {
+  check(std::isfinite(config.resolution) && config.resolution > 0.0,
+        "OccupancyGridConfig: resolution must be positive, got " + std::to_string(config.resolution));
+  check_open_interval(config.probability_hit, 0.5, 1.0, "probability_hit");
+  check_open_interval(config.probability_miss, 0.0, 0.5, "probability_miss");
+  check_open_interval(config.probability_min, 0.0, 0.5, "probability_min");
+  check_open_interval(config.probability_max, 0.5, 1.0, "probability_max");
+  check(std::isfinite(config.max_clear_range) && config.max_clear_range >= 0.0,
+        "OccupancyGridConfig: max_clear_range must be finite and >= 0");
+  check(std::isfinite(config.max_range) && config.max_range > 0.0,
+        "OccupancyGridConfig: max_range must be finite and positive");
+}
+
+/// Writes into one tile after another, remembering the last tile: neighbouring cells of a ray
+/// mostly share it, which saves the table lookup and the copy-on-write check.
+class TileCursor {
+ public:
+  explicit TileCursor(CellGrid& grid) : grid_(grid) {}
+  OccupancyCell& operator()(CellIndex cell) {
+    const CellIndex tile = CellGrid::tile_of(cell);
+    if (tile != tile_) {
+      cells_ = grid_.mutable_tile(tile);
+      tile_ = tile;
+    }
+    return cells_[CellGrid::offset_in_tile(cell)];
+  }
+
+ private:
+  CellGrid& grid_;
+  CellIndex tile_{INT_MIN, INT_MIN};
+  OccupancyCell* cells_ = nullptr;
+};
+
+}  // namespace
+
+double logit(double probability) { return std::log(probability / (1.0 - probability)); }
+
+double probability_from_log_odds(double log_odds) { return 1.0 / (1.0 + std::exp(-log_odds)); }
+
+OccupancyGrid::OccupancyGrid(OccupancyGridConfig config) : config_(config) {
+  validate(config_);
+  geometry_.resolution = config_.resolution;
+  log_odds_hit_ = static_cast<float>(logit(config_.probability_hit));
+  log_odds_miss_ = static_cast<float>(logit(config_.probability_miss));
+  log_odds_min_ = static_cast<float>(logit(config_.probability_min));
+  log_odds_max_ = static_cast<float>(logit(config_.probability_max));
+}
+
+double OccupancyGrid::probability(CellIndex cell) const {
+  const OccupancyCell& c = cells_.at(cell);
+  return c.last_scan == 0 ? 0.5 : probability_from_log_odds(c.log_odds);
+}
+
+void OccupancyGrid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot) {
+  check(T_map_robot.vector().allFinite(), "OccupancyGrid::integrate_scan: non-finite robot pose");
+  check(std::isfinite(scan.angle_min) && std::isfinite(scan.angle_increment),
+        "OccupancyGrid::integrate_scan: non-finite scan angles");
+  const SE2 T_map_sensor = T_map_robot * scan.T_robot_sensor;
+  // Every end point lies within max(max_range, max_clear_range) of the sensor.
+  const double reach = std::max(config_.max_range, config_.max_clear_range) / config_.resolution;
+  check(T_map_sensor.vector().allFinite() &&
+            geometry_.in_index_range(T_map_sensor.translation(), GridGeometry::kMaxCellIndex - reach - 2.0),
+        "OccupancyGrid::integrate_scan: sensor pose non-finite or too far from the map origin");
+  const CellIndex start = geometry_.cell_of(T_map_sensor.translation());
+  CellBox box;
+  box.extend(start);
+  const std::vector<Ray> rays = cast_rays(scan, T_map_sensor, start, box);
+  if (rays.empty()) return;
+  cells_.reserve(box);
+  check(scan_count_ < UINT32_MAX, "OccupancyGrid::integrate_scan: more than 2^32 - 1 scans");
+  ++scan_count_;
+  apply_hits(rays);    // first, so that a cell both hit and passed through gets the hit
+  apply_misses(rays, start);
+}
+
+const std::vector<Eigen::Vector2d>& OccupancyGrid::beam_directions(const LaserScan& scan) {
+  if (beam_directions_.size() != scan.size() || directions_angle_min_ != scan.angle_min ||
+      directions_angle_increment_ != scan.angle_increment) {
+    beam_directions_.resize(scan.size());
+    for (std::size_t beam = 0; beam < scan.size(); ++beam) {
+      beam_directions_[beam] = {std::cos(scan.angle(beam)), std::sin(scan.angle(beam))};
+    }
+    directions_angle_min_ = scan.angle_min;
+    directions_angle_increment_ = scan.angle_increment;
+  }
+  return beam_directions_;
+}
+
+std::vector<OccupancyGrid::Ray> OccupancyGrid::cast_rays(const LaserScan& scan, const SE2& T_map_sensor,
+                                                         CellIndex start, CellBox& box) {
+  const std::vector<Eigen::Vector2d>& directions = beam_directions(scan);
+  const Eigen::Matrix2d R = T_map_sensor.rotation();
+  const Eigen::Vector2d& t = T_map_sensor.translation();
+  std::vector<Ray> rays;
+  rays.reserve(scan.size());
+  const double range_max = std::min(scan.range_max, config_.max_range);
+  for (std::size_t beam = 0; beam < scan.size(); ++beam) {
+    const double range = scan.ranges[beam];
+    if (!std::isfinite(range) || range < scan.range_min || range <= 0.0) continue;
+    const bool hit = range < range_max;
+    const double length = hit ? range : std::min(range, config_.max_clear_range);
+    const Ray ray{geometry_.cell_of(t + R * (length * directions[beam])), hit};
+    if (!hit && ray.end == start) continue;  // clears nothing
+    box.extend(ray.end);
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+void OccupancyGrid::apply_hits(const std::vector<Ray>& rays) {
+  TileCursor cursor(cells_);
+  CellBox touched;
+  for (const Ray& ray : rays) {
+    if (!ray.hit) continue;
+    OccupancyCell& cell = cursor(ray.end);
+    if (cell.last_scan == scan_count_) continue;
+    cell.log_odds = std::clamp(cell.log_odds + log_odds_hit_, log_odds_min_, log_odds_max_);  // Table 9.1, line 4
+    cell.last_scan = scan_count_;
+    touched.extend(ray.end);
+  }
+  cells_.mark_touched(touched);
+}
+
+void OccupancyGrid::apply_misses(const std::vector<Ray>& rays, CellIndex start) {
+  const std::uint32_t stamp = scan_count_;
+  const float miss = log_odds_miss_;
+  const float low = log_odds_min_;
+  for (const Ray& ray : rays) {
+    cells_.update_ray(start, ray.end, [=](OccupancyCell& cell) {
+      // Table 9.1, line 4, for a cell not yet updated by this scan (a miss only lowers l); branch-free.
+      const float updated = std::max(cell.log_odds + miss, low);
+      cell.log_odds = cell.last_scan == stamp ? cell.log_odds : updated;
+      cell.last_scan = stamp;
+    });
+  }
+}
+
+OccupancyMap OccupancyGrid::to_occupancy_map() const {
+  OccupancyMap map;
+  map.resolution = config_.resolution;
+  const CellBox& observed = observed_box();
+  if (observed.empty()) return map;
+  const CellIndex first{observed.min.x - 1, observed.min.y - 1};  // map cell (0, 0)
+  const Eigen::Vector2d corner = geometry_.cell_corner(first);
+  map.origin = SE2(corner.x(), corner.y(), 0.0);
+  map.width = observed.width() + 2;
+  map.height = observed.height() + 2;
+  map.cells.assign(static_cast<std::size_t>(map.width) * map.height, OccupancyMap::kUnknown);
+  constexpr int kTile = CellGrid::kTileSize;
+  cells_.for_each_tile([&](CellIndex tile_first, const CellGrid::Tile& tile) {
+    for (int ty = 0; ty < kTile; ++ty) {
+      for (int tx = 0; tx < kTile; ++tx) {
+        const OccupancyCell& cell = tile.cells[static_cast<std::size_t>(ty * kTile + tx)];
+        if (cell.last_scan == 0) continue;  // observed cells all lie inside `observed`
+        const double p = probability_from_log_odds(cell.log_odds);
+        map.at(tile_first.x + tx - first.x, tile_first.y + ty - first.y) = static_cast<std::int8_t>(std::lround(100.0 * p));
+      }
+    }
+  });
+  return map;
+}
+
+std::size_t OccupancyGrid::memory_bytes() const { return sizeof(*this) - sizeof(cells_) + cells_.memory_bytes(); }
+
+}  // namespace slam2d

@@ -1,0 +1,110 @@
+#pragma once
+// Occupancy grid mapping in log-odds form: H. Moravec and A. Elfes, "High resolution maps from
+// wide angle sonar", ICRA 1985; S. Thrun, W. Burgard, D. Fox, "Probabilistic Robotics", 2005,
+// Table 9.1 (occupancy_grid_mapping, line 4: l += inverse_sensor_model - l_0, with l_0 = 0), with
+// the two-valued inverse sensor model of ray-casting mappers: a hit on the end cell, a miss on the
+// cells a beam passes through.
+//
+// Cells hold log-odds l = log(p / (1 - p)) in float, clamped to [logit(p_min), logit(p_max)],
+// prior 0 (p = 0.5). Each cell also records the number of the last scan that updated it: 0 means
+// never observed ("unknown"), which is how is_known() tells an observed p = 0.5 from an unknown
+// cell, and how a scan updates each cell at most once.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/occupancy_map.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/grid/grid_geometry.hpp"
+#include "slam2d/grid/tiled_grid.hpp"
+
+namespace slam2d {
+
+struct OccupancyGridConfig {
+  double resolution = 0.05;        // m per cell, > 0
+  double probability_hit = 0.7;    // inverse sensor model: P(occupied | hit), in (0.5, 1)
+  double probability_miss = 0.4;   // P(occupied | ray passed through), in (0, 0.5)
+  double probability_min = 0.12;   // clamp, in (0, 0.5); keeps cells able to change
+  double probability_max = 0.97;   // clamp, in (0.5, 1)
+  // m, >= 0; no-return beams clear free space up to here and never mark. A no-return reading may
+  // be a dropout on a near wall, so it clears only a short way (Cartographer's
+  // missing_data_ray_length is 5 m too).
+  double max_clear_range = 5.0;
+  double max_range = 100.0;        // m, > 0; returns at or beyond are treated as no-return beams
+};
+
+struct OccupancyCell {
+  float log_odds = 0.0f;        // log(p / (1 - p)), clamped
+  std::uint32_t last_scan = 0;  // 0: never observed; else the number of the last scan that updated it
+};
+
+class OccupancyGrid {
+ public:
+  /// Throws Error for a configuration outside the ranges documented on OccupancyGridConfig.
+  explicit OccupancyGrid(OccupancyGridConfig config = {});
+
+  /// Ray casting (Bresenham, integer) from the sensor's cell: a miss update on every cell up to,
+  /// not including, the end cell, a hit update on the end cell. Readings >= range_max (or
+  /// >= config.max_range) are no-return beams: they clear free space up to
+  /// min(reading, max_clear_range) and mark nothing. NaN, inf, non-positive and below-range_min
+  /// readings are ignored. Each cell is updated at most once per scan; a cell both hit and passed
+  /// through gets the hit. The grid origin is the map frame's origin. Throws Error for a
+  /// non-finite pose or scan geometry, or a pose beyond GridGeometry::kMaxCellIndex cells.
+  void integrate_scan(const LaserScan& scan, const SE2& T_map_robot);
+
+  /// P(occupied) of the cell holding a map-frame point; 0.5 for unknown cells (and for points
+  /// that are not finite or lie beyond GridGeometry::kMaxCellIndex cells).
+  double probability(const Eigen::Vector2d& point) const {
+    return geometry_.in_index_range(point) ? probability(geometry_.cell_of(point)) : 0.5;
+  }
+  double probability(CellIndex cell) const;
+  /// Log-odds of a cell; 0 for unknown cells.
+  double log_odds(CellIndex cell) const { return cells_.at(cell).log_odds; }
+  bool is_known(CellIndex cell) const { return cells_.at(cell).last_scan != 0; }
+
+  /// The finished map, cropped to the observed cells plus a one-cell margin (unknown) on each
+  /// side: observed cells hold round(100 p), unobserved ones -1. Empty (0 x 0) before any update.
+  OccupancyMap to_occupancy_map() const;
+
+  /// Bounding box of the observed cells (empty before any update).
+  const CellBox& observed_box() const { return cells_.bounding_box(); }
+  const GridGeometry& geometry() const { return geometry_; }
+  const TiledGrid<OccupancyCell>& cells() const { return cells_; }
+  /// Number of scans integrated so far.
+  std::uint32_t scan_count() const { return scan_count_; }
+  std::size_t memory_bytes() const;
+  const OccupancyGridConfig& config() const { return config_; }
+
+ private:
+  struct Ray {
+    CellIndex end;
+    bool hit;  // false for a no-return beam
+  };
+  std::vector<Ray> cast_rays(const LaserScan& scan, const SE2& T_map_sensor, CellIndex start, CellBox& box);
+  const std::vector<Eigen::Vector2d>& beam_directions(const LaserScan& scan);
+  void apply_hits(const std::vector<Ray>& rays);
+  void apply_misses(const std::vector<Ray>& rays, CellIndex start);
+
+  OccupancyGridConfig config_;
+  GridGeometry geometry_;
+  float log_odds_hit_;
+  float log_odds_miss_;
+  float log_odds_min_;
+  float log_odds_max_;
+  std::uint32_t scan_count_ = 0;
+  TiledGrid<OccupancyCell> cells_;
+  // (cos, sin) of every beam's bearing for the last scan geometry (angle_min, angle_increment, size).
+  std::vector<Eigen::Vector2d> beam_directions_;
+  double directions_angle_min_ = 0.0;
+  double directions_angle_increment_ = 0.0;
+};
+
+/// log(p / (1 - p)).
+double logit(double probability);
+/// The inverse of logit: 1 / (1 + exp(-log_odds)).
+double probability_from_log_odds(double log_odds);
+
+}  // namespace slam2d

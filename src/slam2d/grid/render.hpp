@@ -1,0 +1,41 @@
+#pragma once
+// Rendering of an occupancy map and a trajectory as an RGB picture (the CLI's map.png).
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "slam2d/core/occupancy_map.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+struct RenderOptions {
+  int scale = 1;                      // output pixels per map cell, in [1, 64]
+  bool shaded = false;                // true: grey level follows occupancy; false: three colours
+  double occupied_threshold = 65.0;   // %, cells above are occupied (when not shaded), as map_saver
+  double free_threshold = 19.6;       // %, cells below are free (when not shaded)
+  Rgb occupied_colour{0, 0, 0};
+  Rgb free_colour{255, 255, 255};
+  Rgb unknown_colour{205, 205, 205};  // also the band between the thresholds
+  Rgb trajectory_colour{220, 30, 30};
+  Rgb start_colour{0, 170, 0};        // filled disc at the first pose
+  Rgb end_colour{30, 60, 220};        // filled disc at the last pose
+  int marker_radius = 3;              // pixels, >= 0
+};
+
+/// The map as an RGB image, row 0 at the top (map row height - 1), each cell a scale x scale
+/// block: occupied black, free white, unknown grey (or, shaded, a grey level 255 (1 - v / 100)).
+/// The trajectory (map-frame poses) is drawn on it as a one-pixel polyline (Bresenham), clipped to
+/// the picture, with discs at its start and end. Throws Error for a non-finite pose, a scale
+/// outside [1, 64], a map whose cells do not match its size, or a picture over 2^28 pixels.
+RgbImage render_map(const OccupancyMap& map, const std::vector<SE2>& trajectory, const RenderOptions& options = {});
+
+/// The picture pixel (column, row) holding a map-frame point, in continuous coordinates: the
+/// pixel is (floor(column), floor(row)).
+Eigen::Vector2d map_point_to_pixel(const OccupancyMap& map, const Eigen::Vector2d& point, int scale);
+
+}  // namespace slam2d

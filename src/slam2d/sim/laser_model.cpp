@@ -1,0 +1,54 @@
+#include "slam2d/sim/laser_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+void validate(const LaserModelConfig& config) {
+  const double fields[] = {config.field_of_view, config.range_max, config.range_noise_sigma,
+                           config.dropout_probability, config.rate_hz};
+  for (const double f : fields) check(std::isfinite(f), "laser model: every parameter must be finite");
+  check(config.T_robot_sensor.vector().allFinite(), "laser model: T_robot_sensor must be finite");
+  check(config.beams >= 2, "laser model: beams must be >= 2");
+  check(config.field_of_view > 0.0 && config.field_of_view <= 2.0 * std::numbers::pi,
+        "laser model: field_of_view must be in (0, 2 pi]");
+  check(config.range_max > 0.0, "laser model: range_max must be > 0");
+  check(config.range_noise_sigma >= 0.0, "laser model: range_noise_sigma must be >= 0");
+  check(config.dropout_probability >= 0.0 && config.dropout_probability <= 1.0,
+        "laser model: dropout_probability must be in [0, 1]");
+  check(config.rate_hz > 0.0, "laser model: rate_hz must be > 0");
+}
+
+double beam_increment(const LaserModelConfig& config) {
+  const int steps = config.beams % 2 == 1 ? config.beams - 1 : config.beams;
+  return config.field_of_view / static_cast<double>(steps);
+}
+
+LaserScan simulate_scan(const RayCaster& caster, const SE2& T_world_robot, double stamp,
+                        const LaserModelConfig& config, Rng& rng) {
+  LaserScan scan;
+  scan.stamp = stamp;
+  scan.angle_min = -0.5 * config.field_of_view;
+  scan.angle_increment = beam_increment(config);
+  scan.range_min = 0.0;
+  scan.range_max = config.range_max;
+  scan.T_robot_sensor = config.T_robot_sensor;
+  scan.ranges.resize(static_cast<std::size_t>(config.beams));
+  const SE2 T_world_sensor = T_world_robot * config.T_robot_sensor;
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
+    const bool dropout = rng.bernoulli(config.dropout_probability);
+    const double noise = rng.gaussian(0.0, config.range_noise_sigma);
+    const auto hit = caster.cast(T_world_sensor.translation(), T_world_sensor.theta() + scan.angle(i), config.range_max);
+    if (!hit || dropout) {
+      scan.ranges[i] = config.range_max;
+      continue;
+    }
+    scan.ranges[i] = std::clamp(*hit + noise, 0.0, config.range_max);
+  }
+  return scan;
+}
+
+}  // namespace slam2d

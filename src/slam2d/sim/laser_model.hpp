@@ -1,0 +1,42 @@
+#pragma once
+// A planar laser range finder in the style of a SICK LMS 200 as logged by CARMEN: beams over the
+// field of view, Gaussian range noise, random dropouts, and "no return" reported as range_max.
+// The scan is taken at one instant (no motion distortion during the sweep).
+//
+// Beam angles follow the CARMEN FLASER convention, so a written log reads back with the same
+// angles: angle_min = -field_of_view / 2; an even beam count splits the field of view into
+// `beams` equal steps (180 beams: -90 deg .. +89 deg), an odd one puts beams at both ends
+// (181 beams: -90 deg .. +90 deg).
+
+#include <numbers>
+
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/rng.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/sim/ray_caster.hpp"
+
+namespace slam2d {
+
+struct LaserModelConfig {
+  int beams = 180;                             // >= 2
+  double field_of_view = std::numbers::pi;     // rad, in (0, 2 pi]
+  double range_max = 30.0;                     // m; no return (nothing hit, or a dropout) reads range_max
+  double range_noise_sigma = 0.01;             // m, standard deviation of the Gaussian range noise
+  double dropout_probability = 0.005;          // 1, chance that a beam returns nothing
+  double rate_hz = 10.0;                       // Hz, scans per second
+  SE2 T_robot_sensor;                          // the sensor's mounting pose on the robot
+};
+
+/// Throws Error for beams < 2, a field of view outside (0, 2 pi], range_max <= 0, negative noise,
+/// a dropout probability outside [0, 1], rate_hz <= 0, or non-finite values.
+void validate(const LaserModelConfig& config);
+
+/// Angle between beams (rad) by the convention above.
+double beam_increment(const LaserModelConfig& config);
+
+/// A scan from the robot pose T_world_robot. Each beam draws its dropout and its noise from `rng`
+/// in beam order (two draws per beam whatever happens), so the stream does not depend on the world.
+LaserScan simulate_scan(const RayCaster& caster, const SE2& T_world_robot, double stamp,
+                        const LaserModelConfig& config, Rng& rng);
+
+}  // namespace slam2d

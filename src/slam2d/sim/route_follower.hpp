@@ -1,0 +1,60 @@
+#pragma once
+// A smooth path-following controller for a differential-drive robot on a closed polyline route:
+// pure pursuit (Coulter, "Implementation of the Pure Pursuit Path Tracking Algorithm",
+// CMU-RI-TR-92-01, 1992) for the turn rate, with a speed profile that brakes for corners so that
+// each corner can be taken within the turn-rate limit, and acceleration limits on both velocities.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct RouteFollowerConfig {
+  double speed = 0.6;                     // m/s, cruise speed
+  double max_turn_rate = 1.0;             // rad/s
+  double max_acceleration = 0.5;          // m/s^2
+  double max_angular_acceleration = 4.0;  // rad/s^2
+  double min_lookahead = 0.3;             // m, pure-pursuit look-ahead at standstill
+  double lookahead_time = 0.5;            // s, look-ahead grows by speed * this
+  double corner_cut = 0.1;                // m, how far a corner's arc may pass inside the corner
+  double min_speed = 0.05;                // m/s, the slowest corner speed
+};
+
+/// A velocity command: forward speed (m/s) and turn rate (rad/s, counter-clockwise).
+struct VelocityCommand {
+  double v = 0.0;
+  double omega = 0.0;
+};
+
+class RouteFollower {
+ public:
+  /// `route`: closed polyline (the last point connects back to the first), >= 2 distinct points.
+  /// Throws Error for fewer points or non-finite coordinates.
+  RouteFollower(std::vector<Eigen::Vector2d> route, const RouteFollowerConfig& config);
+
+  /// route[0], facing route[1].
+  SE2 start_pose() const;
+  /// The next command for a robot at `T_world_robot` driving `current`, to hold for `dt` s.
+  VelocityCommand update(const SE2& T_world_robot, const VelocityCommand& current, double dt);
+  /// Distance driven along the route so far (m), counting repeats: laps = progress / length.
+  double progress() const { return progress_; }
+  double route_length() const { return length_; }
+
+ private:
+  Eigen::Vector2d point_at(double s) const;
+  void advance_progress(const Eigen::Vector2d& position);
+  /// The speed (m/s) allowed now so that every corner within braking distance can be taken.
+  double corner_speed_limit() const;
+
+  RouteFollowerConfig config_;
+  std::vector<Eigen::Vector2d> points_;
+  std::vector<double> arc_;           // m, arc length at each point; arc_.back() = length_ (closing point)
+  std::vector<double> corner_speed_;  // m/s, the speed allowed at each point's corner
+  double length_ = 0.0;
+  double progress_ = 0.0;
+};
+
+}  // namespace slam2d

@@ -1,0 +1,60 @@
+#pragma once
+// Simulated robot runs: a differential-drive robot follows a world's route (route_follower.hpp),
+// its wheel odometry drifts (odometry_model.hpp) and its laser scans the walls (laser_model.hpp).
+// The output is a CARMEN log in memory, in the file order of a raw log, plus the true trajectory.
+//
+// Deterministic: for a given config the run is identical on every platform. All randomness comes
+// from Rng(seed), split into one stream for the odometry noise and one for the laser, so changing
+// the laser settings does not change the odometry, and the true motion never depends on the seed.
+//
+// Timing: ODOM every 1 / odometry.rate_hz s and FLASER + TRUEPOS every 1 / laser.rate_hz s, both
+// from t = 0 to t = duration; an ODOM with the same stamp as a FLASER comes first. The robot's
+// velocity command is updated every 1 / control_rate_hz s and held in between; the true pose
+// follows the exact constant-velocity arc. The odometry starts at the true start pose (the
+// odometry frame is the world frame at t = 0) and is integrated over each ODOM interval; a scan
+// between two ODOM messages gets the last one plus the noise-free part of the motion since.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "slam2d/core/trajectory.hpp"
+#include "slam2d/io/carmen.hpp"
+#include "slam2d/sim/laser_model.hpp"
+#include "slam2d/sim/odometry_model.hpp"
+#include "slam2d/sim/world.hpp"
+
+namespace slam2d {
+
+struct SimulationConfig {
+  std::string world = "office";    // a make_world name (ignored by the overload taking a World)
+  double duration = 240.0;         // s, in [0, 1e5]
+  std::uint64_t seed = 1;          // of every random stream
+  double speed = 0.6;              // m/s, cruise speed
+  double max_turn_rate = 1.0;      // rad/s
+  double max_acceleration = 0.5;   // m/s^2
+  double control_rate_hz = 100.0;  // Hz, velocity command updates
+  LaserModelConfig laser;
+  OdometryModelConfig odometry;
+};
+
+struct SimulatedRun {
+  SimulationConfig config;              // what made this run
+  std::vector<CarmenMessage> messages;  // file order: ODOM, FLASER, TRUEPOS; stamps from 0, never decreasing
+  Trajectory truth;                     // the true pose T_world_robot at each scan's stamp
+};
+
+/// Throws Error for invalid settings (non-finite or out-of-range values, an unknown world).
+void validate(const SimulationConfig& config);
+
+/// Runs the simulation in the world named by config.world.
+SimulatedRun simulate(const SimulationConfig& config);
+/// Runs the simulation in a given world (its route must have >= 2 distinct points).
+SimulatedRun simulate(const SimulationConfig& config, const World& world);
+
+/// Writes the CARMEN log (atomic; gzip when the path ends in .gz): comments, the PARAM lines of the
+/// laser geometry (field of view, resolution, maximum range, mounting offsets), then every message.
+/// If `truth_path` is not empty, also writes the true trajectory there (write_trajectory format).
+void write_run(const SimulatedRun& run, const std::string& log_path, const std::string& truth_path);
+
+}  // namespace slam2d

@@ -1,0 +1,190 @@
+// The slam2d command line: outputs on simulated data, and bad input giving one clear
+// "PATH:LINE: message", a non-zero exit and no output files.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/eval/ate.hpp"
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+using test::CommandResult;
+using test::TempDir;
+using test::json_number;
+using test::run_command;
+
+std::string slam2d(const std::string& arguments) { return "'" + test::cli_path() + "' " + arguments; }
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+std::string flaser_line(int beams, const std::string& range, double stamp) {
+  std::string line = "FLASER " + std::to_string(beams);
+  for (int i = 0; i < beams; ++i) line += " " + range;
+  return line + " 0 0 0 0 0 0 " + std::to_string(stamp) + " host " + std::to_string(stamp) + "\n";
+}
+
+// A simulated log shared by the tests of this file (simulated once).
+class CliTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    const CommandResult result = run_command(slam2d("simulate --quiet --duration 30 --seed 5 --out " + log() +
+                                                    " --truth " + truth()));
+    ASSERT_EQ(result.exit_code, 0) << result.errors;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string log() { return dir_->file("sim.clf"); }
+  static std::string truth() { return dir_->file("truth.txt"); }
+  static TempDir* dir_;
+};
+TempDir* CliTest::dir_ = nullptr;
+
+TEST_F(CliTest, InfoReportsTheSimulatedLog) {
+  const CommandResult result = run_command(slam2d("info --json " + log()));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  const auto scans = json_number(result.output, "scans");
+  ASSERT_TRUE(scans);
+  EXPECT_NEAR(*scans, 300, 2);  // 30 s at 10 Hz
+  EXPECT_EQ(json_number(result.output, "beams"), 180.0);
+  EXPECT_NEAR(*json_number(result.output, "fov_deg"), 180.0, 1e-9);
+  EXPECT_NEAR(*json_number(result.output, "rate_hz"), 10.0, 0.1);
+  EXPECT_NEAR(*json_number(result.output, "duration_s"), 29.9, 0.2);
+  EXPECT_GT(*json_number(result.output, "odom_messages"), 500);
+  EXPECT_EQ(json_number(result.output, "backwards_timestamps"), 0.0);
+  for (const char* key : {"max_range", "skipped_lines"}) EXPECT_TRUE(json_number(result.output, key)) << key;
+}
+
+TEST_F(CliTest, MapWritesEveryOutputWithOneTrajectoryLinePerScan) {
+  TempDir out;
+  const CommandResult result = run_command(slam2d("map --quiet --json --method odometry --resolution 0.1 --out " +
+                                                  out.path().string() + " " + log()));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  for (const char* name : {"map.pgm", "map.yaml", "map.png", "trajectory.txt", "summary.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(out.path() / name)) << name;
+  }
+  const auto scans = json_number(result.output, "scans");
+  ASSERT_TRUE(scans);
+  EXPECT_EQ(test::count_data_lines(out.file("trajectory.txt")), static_cast<std::size_t>(*scans));
+  for (const char* key : {"data_duration_s", "cpu_s", "wall_s", "realtime_factor"}) {
+    EXPECT_TRUE(json_number(result.output, key)) << key;
+  }
+  // Odometry drifts, but over 30 s it stays near the truth.
+  const AteResult ate = absolute_trajectory_error(read_trajectory(out.file("trajectory.txt")), read_trajectory(truth()));
+  EXPECT_GT(ate.matched, 290u);
+  EXPECT_LT(ate.rmse, 0.5);
+  // The map reads back through `info` with the requested resolution.
+  const CommandResult info = run_command(slam2d("info --json " + out.file("map.yaml")));
+  ASSERT_EQ(info.exit_code, 0) << info.errors;
+  EXPECT_EQ(json_number(info.output, "resolution"), 0.1);
+  EXPECT_GT(*json_number(info.output, "occupied_cells"), 100);
+}
+
+TEST_F(CliTest, EvalAgainstTheTruthAndRelations) {
+  TempDir out;
+  ASSERT_EQ(run_command(slam2d("map --quiet --out " + out.path().string() + " " + log())).exit_code, 0);
+  const CommandResult self = run_command(slam2d("eval --json " + truth() + " --reference " + truth()));
+  ASSERT_EQ(self.exit_code, 0) << self.errors;
+  EXPECT_NEAR(*json_number(self.output, "ate_rmse"), 0.0, 1e-9);
+  EXPECT_NEAR(*json_number(self.output, "rpe_trans_rmse"), 0.0, 1e-9);
+  const CommandResult odometry = run_command(slam2d("eval --json " + out.file("trajectory.txt") + " --reference " + truth()));
+  ASSERT_EQ(odometry.exit_code, 0) << odometry.errors;
+  EXPECT_GT(*json_number(odometry.output, "ate_rmse"), 0.0);
+
+  // A relation file made from the truth: the truth scores zero on it.
+  std::ofstream relations(out.file("truth.relations"));
+  relations << "0.1 5.1 0 0 0 0 0 0\n";
+  relations.close();
+  const CommandResult missing = run_command(slam2d("eval --json " + truth() + " --relations " + out.file("truth.relations")));
+  ASSERT_EQ(missing.exit_code, 0) << missing.errors;
+  EXPECT_TRUE(json_number(missing.output, "relations"));
+  EXPECT_TRUE(json_number(missing.output, "missing"));
+}
+
+TEST_F(CliTest, SimulateIsDeterministic) {
+  TempDir out;
+  ASSERT_EQ(run_command(slam2d("simulate --quiet --duration 30 --seed 5 --out " + out.file("again.clf"))).exit_code, 0);
+  std::ifstream a(log()), b(out.file("again.clf"));
+  const std::string text_a((std::istreambuf_iterator<char>(a)), {}), text_b((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(text_a, text_b);
+  ASSERT_EQ(run_command(slam2d("simulate --quiet --duration 30 --seed 6 --out " + out.file("other.clf"))).exit_code, 0);
+  std::ifstream c(out.file("other.clf"));
+  EXPECT_NE(text_a, std::string((std::istreambuf_iterator<char>(c)), {}));
+}
+
+// Bad input: one line "PATH:LINE: message" on stderr, exit 1, no output left behind.
+struct BadLog {
+  const char* name;
+  std::string content;
+  int line;
+  const char* message_part;
+};
+
+void PrintTo(const BadLog& bad, std::ostream* os) { *os << bad.name; }
+
+class CliBadInput : public ::testing::TestWithParam<BadLog> {};
+
+TEST_P(CliBadInput, FailsWithFileAndLineAndLeavesNoOutput) {
+  const BadLog& bad = GetParam();
+  TempDir dir;
+  const std::string log = dir.file(bad.name);
+  write_text(log, bad.content);
+  const std::string out = dir.file("out");
+  for (const std::string& command : {"map --quiet --out " + out + " " + log, std::string("info ") + log}) {
+    const CommandResult result = run_command(slam2d(command));
+    EXPECT_EQ(result.exit_code, 1) << command;
+    const std::string expected_prefix = log + ":" + std::to_string(bad.line) + ": ";
+    EXPECT_EQ(result.errors.rfind(expected_prefix, 0), 0u) << result.errors;
+    EXPECT_NE(result.errors.find(bad.message_part), std::string::npos) << result.errors;
+    EXPECT_EQ(std::count(result.errors.begin(), result.errors.end(), '\n'), 1) << result.errors;
+    EXPECT_FALSE(std::filesystem::exists(out)) << "output left behind by: " << command;
+  }
+}
+
+std::string good_prefix() { return "# a log\n" + flaser_line(180, "2.5", 1.0) + "ODOM 0 0 0 0 0 0 1.05 host 1.05\n"; }
+
+INSTANTIATE_TEST_SUITE_P(
+    Logs, CliBadInput,
+    ::testing::Values(
+        BadLog{"truncated.clf", good_prefix() + flaser_line(180, "2.5", 1.1).substr(0, 400) + "\n", 4, "FLASER"},
+        BadLog{"nan.clf", good_prefix() + flaser_line(180, "nan", 1.1), 4, "NaN"},
+        BadLog{"negative.clf", good_prefix() + flaser_line(180, "-1.0", 1.1), 4, "negative"},
+        BadLog{"garbage.clf", good_prefix() + "ODOM 1 2 x 0 0 0 1.2 host 1.2\n", 4, "ODOM"}),
+    [](const auto& info) { return std::string(info.param.name).substr(0, std::string(info.param.name).find('.')); });
+
+TEST(CliErrors, MissingFileIsNamed) {
+  TempDir dir;
+  const std::string missing = dir.file("nowhere.clf");
+  const CommandResult result = run_command(slam2d("map --quiet --out " + dir.file("out") + " " + missing));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.errors.rfind(missing + ": ", 0), 0u) << result.errors;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
+}
+
+TEST(CliErrors, MapYamlWithMissingImageIsNamed) {
+  TempDir dir;
+  const std::string yaml = dir.file("broken.yaml");
+  write_text(yaml, "image: nothere.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n");
+  const CommandResult result = run_command(slam2d("info " + yaml));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.errors.rfind(yaml + ":1: ", 0), 0u) << result.errors;
+  EXPECT_NE(result.errors.find("nothere.pgm"), std::string::npos) << result.errors;
+}
+
+TEST(CliErrors, UnknownMethodAndMissingOptionsAreRefused) {
+  TempDir dir;
+  EXPECT_NE(run_command(slam2d("map --method magic --out " + dir.file("o") + " x.clf")).exit_code, 0);
+  EXPECT_NE(run_command(slam2d("eval " + dir.file("t.txt"))).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o")));
+}
+
+}  // namespace
+}  // namespace slam2d

@@ -1,0 +1,101 @@
+// render_map: cell colours, trajectory polyline and markers.
+
+#include "slam2d/grid/render.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+namespace {
+
+Rgb pixel(const RgbImage& image, int col, int row) {
+  const std::size_t i = 3 * (static_cast<std::size_t>(row) * image.width + col);
+  return {image.rgb[i], image.rgb[i + 1], image.rgb[i + 2]};
+}
+
+/// 10 x 6 cells of 1 m, all free but cell (9, 0) occupied, (0, 5) unknown and (4, 0) at 50 %.
+OccupancyMap test_map() {
+  OccupancyMap map;
+  map.resolution = 1.0;
+  map.width = 10;
+  map.height = 6;
+  map.cells.assign(60, OccupancyMap::kFree);
+  map.at(9, 0) = OccupancyMap::kOccupied;
+  map.at(0, 5) = OccupancyMap::kUnknown;
+  map.at(4, 0) = 50;
+  return map;
+}
+
+TEST(Render, CellsAreScaledBlocksWithRowZeroAtTheTop) {
+  const RenderOptions options{.scale = 2};
+  const RgbImage image = render_map(test_map(), {}, options);
+  ASSERT_EQ(image.width, 20);
+  ASSERT_EQ(image.height, 12);
+  // Map row 0 is the bottom of the picture: cell (9, 0) covers columns 18-19, rows 10-11.
+  for (int r = 10; r < 12; ++r) {
+    for (int c = 18; c < 20; ++c) EXPECT_EQ(pixel(image, c, r), options.occupied_colour);
+  }
+  EXPECT_EQ(pixel(image, 17, 11), options.free_colour);
+  EXPECT_EQ(pixel(image, 1, 1), options.unknown_colour);  // cell (0, 5), top-left
+  EXPECT_EQ(pixel(image, 2, 1), options.free_colour);
+  EXPECT_EQ(pixel(image, 8, 10), options.unknown_colour);  // 50 %: between the thresholds
+  const RgbImage shaded = render_map(test_map(), {}, RenderOptions{.shaded = true});
+  EXPECT_EQ(pixel(shaded, 4, 5), (Rgb{128, 128, 128}));  // 255 * (1 - 0.5) = 127.5 -> 128
+  EXPECT_EQ(pixel(shaded, 9, 5), (Rgb{0, 0, 0}));
+}
+
+TEST(Render, DrawsTheTrajectoryWithStartAndEndMarkers) {
+  const RenderOptions options{.scale = 2, .marker_radius = 1};
+  // From (1.5, 3.5) to (8.5, 3.5): pixels (x * 2, (6 - y) * 2) = (3, 5) to (17, 5), then down to (8.5, 1.5) = (17, 9).
+  const std::vector<SE2> trajectory{SE2(1.5, 3.5, 0.0), SE2(8.5, 3.5, 0.0), SE2(8.5, 1.5, -1.0)};
+  const RgbImage image = render_map(test_map(), trajectory, options);
+  for (int c = 5; c <= 15; ++c) EXPECT_EQ(pixel(image, c, 5), options.trajectory_colour) << c;
+  for (int r = 5 + 2; r <= 9 - 2; ++r) EXPECT_EQ(pixel(image, 17, r), options.trajectory_colour) << r;
+  EXPECT_EQ(pixel(image, 10, 4), options.free_colour);  // only one pixel wide
+  EXPECT_EQ(pixel(image, 10, 6), options.free_colour);
+  // Start disc (radius 1) around (3, 5), end disc around (17, 9).
+  for (const auto& [dc, dr] : {std::pair{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+    EXPECT_EQ(pixel(image, 3 + dc, 5 + dr), options.start_colour);
+    EXPECT_EQ(pixel(image, 17 + dc, 9 + dr), options.end_colour);
+  }
+  EXPECT_EQ(pixel(image, 4, 6), options.free_colour);  // the disc's corner is not painted
+  // Count: every trajectory-coloured pixel lies on one of the two segments.
+  for (int r = 0; r < image.height; ++r) {
+    for (int c = 0; c < image.width; ++c) {
+      if (pixel(image, c, r) == options.trajectory_colour) {
+        EXPECT_TRUE(r == 5 || c == 17) << c << "," << r;
+      }
+    }
+  }
+}
+
+TEST(Render, RotatedOriginAndClipping) {
+  OccupancyMap map = test_map();
+  map.origin = SE2(10.0, 0.0, std::numbers::pi / 2);  // map x along world y
+  // World (9.5, 2.5) is map-local (2.5, 0.5): pixel (2.5, 5.5) at scale 1.
+  const Eigen::Vector2d p = map_point_to_pixel(map, {9.5, 2.5}, 1);
+  EXPECT_NEAR(p.x(), 2.5, 1e-12);
+  EXPECT_NEAR(p.y(), 5.5, 1e-12);
+  // A trajectory reaching far outside the picture is clipped.
+  const std::vector<SE2> trajectory{SE2(9.5, 2.5, 0.0), SE2(9.5, 1e9, 0.0)};
+  const RgbImage image = render_map(map, trajectory, RenderOptions{.marker_radius = 0});
+  const RenderOptions defaults;
+  EXPECT_EQ(pixel(image, 2, 5), defaults.start_colour);
+  for (int c = 3; c < 10; ++c) EXPECT_EQ(pixel(image, c, 5), defaults.trajectory_colour) << c;
+}
+
+TEST(Render, RejectsBadOptions) {
+  EXPECT_THROW(render_map(test_map(), {}, RenderOptions{.scale = 0}), Error);
+  OccupancyMap broken = test_map();
+  broken.cells.pop_back();
+  EXPECT_THROW(render_map(broken, {}), Error);
+  EXPECT_THROW(render_map(test_map(), {SE2(), SE2(std::nan(""), 0.0, 0.0)}), Error);
+  EXPECT_EQ(render_map(OccupancyMap{}, {SE2()}).width, 0);
+}
+
+}  // namespace
+}  // namespace slam2d

@@ -1,0 +1,90 @@
+// The command line on the real logs of Kuemmerle et al. 2009 (intel, aces, fr079): `info` counts,
+// odometry mapping with one trajectory line per scan, and `eval` agreeing with the independent
+// Python implementation of the relation metric in tools/relation_error_reference.py.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+using test::CommandResult;
+using test::json_number;
+using test::run_command;
+
+std::string slam2d(const std::string& arguments) { return "'" + test::cli_path() + "' " + arguments; }
+
+TEST(RealDataCli, InfoOnIntel) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
+  const CommandResult result = run_command(slam2d("info --json " + (data / "intel/intel.clf.gz").string()));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_EQ(json_number(result.output, "scans"), 13631.0);
+  EXPECT_EQ(json_number(result.output, "beams"), 180.0);
+  EXPECT_NEAR(*json_number(result.output, "duration_s"), 2691.3, 0.05);
+  EXPECT_EQ(json_number(result.output, "odom_messages"), 26915.0);
+  EXPECT_NEAR(*json_number(result.output, "fov_deg"), 180.0, 1e-9);
+  EXPECT_NEAR(*json_number(result.output, "rate_hz"), 13630 / 2691.3, 0.01);
+  EXPECT_EQ(json_number(result.output, "backwards_timestamps"), 631.0);  // scans out of order, as in the data README
+}
+
+struct RealLog {
+  const char* name;
+  const char* log;
+  const char* relations;
+  double scans;
+  double relations_count;
+  // Raw odometry relation error (m): loose bounds around what odometry alone scores.
+  double min_trans_mean;
+  double max_trans_mean;
+};
+
+void PrintTo(const RealLog& log, std::ostream* os) { *os << log.name; }
+
+class RealDataOdometryMapping : public ::testing::TestWithParam<RealLog> {};
+
+TEST_P(RealDataOdometryMapping, MapsAndEvaluatesLikeTheReference) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
+  const RealLog& log = GetParam();
+  test::TempDir out;
+  const CommandResult map = run_command(slam2d("map --quiet --json --method odometry --out " + out.path().string() +
+                                               " " + (data / log.log).string()));
+  ASSERT_EQ(map.exit_code, 0) << map.errors;
+  EXPECT_EQ(json_number(map.output, "scans"), log.scans);
+  EXPECT_EQ(static_cast<double>(test::count_data_lines(out.file("trajectory.txt"))), log.scans);
+  for (const char* name : {"map.pgm", "map.yaml", "map.png", "summary.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(out.path() / name)) << name;
+  }
+
+  const std::string relations = (data / log.relations).string();
+  const CommandResult ours = run_command(slam2d("eval --json " + out.file("trajectory.txt") + " --relations " + relations));
+  ASSERT_EQ(ours.exit_code, 0) << ours.errors;
+  const CommandResult reference = run_command("python3 tools/relation_error_reference.py " + out.file("trajectory.txt") +
+                                              " " + relations);
+  ASSERT_EQ(reference.exit_code, 0) << reference.errors;
+  for (const char* key : {"relations", "missing", "trans_mean", "trans_std", "trans_max", "rot_mean_deg",
+                          "rot_std_deg", "rot_max_deg", "trans_sq_mean", "rot_sq_mean_deg2"}) {
+    const auto a = json_number(ours.output, key);
+    const auto b = json_number(reference.output, key);
+    ASSERT_TRUE(a && b) << key;
+    EXPECT_NEAR(*a, *b, 1e-9 * std::max(1.0, std::abs(*b))) << key;
+  }
+  EXPECT_EQ(json_number(ours.output, "relations"), log.relations_count);
+  EXPECT_EQ(json_number(ours.output, "missing"), 0.0);
+  const double trans_mean = *json_number(ours.output, "trans_mean");
+  EXPECT_GT(trans_mean, log.min_trans_mean);
+  EXPECT_LT(trans_mean, log.max_trans_mean);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Logs, RealDataOdometryMapping,
+    ::testing::Values(RealLog{"intel", "intel/intel.clf.gz", "intel/intel.relations", 13631, 2984, 7.3, 7.45},
+                      RealLog{"aces", "aces/aces.clf.gz", "aces/aces.relations", 7374, 1279, 0.50, 0.60},
+                      RealLog{"fr079", "fr079/fr079.clf.gz", "fr079/fr079.relations", 4934, 1685, 6.45, 6.55}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace slam2d
