@@ -17,18 +17,7 @@ namespace {
 
 using test::fixture_path;
 using test::TempDir;
-
-void expect_parse_error(const std::string& path, std::size_t line, const std::string& needle) {
-  try {
-    read_pose_graph(path);
-    FAIL() << "no ParseError for " << path;
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.line(), line);
-    const std::string what = e.what();
-    EXPECT_EQ(what.rfind(path + ":" + std::to_string(line) + ": ", 0), 0u) << what;
-    EXPECT_NE(e.message().find(needle), std::string::npos) << what;
-  }
-}
+using test::expect_parse_error;
 
 void expect_same_pose(const SE2& actual, const SE2& expected) {
   EXPECT_EQ(actual.x(), expected.x());
@@ -155,13 +144,13 @@ TEST(PoseGraphIo, EmptyGraphRoundTrips) {
 }
 
 TEST(PoseGraphIo, MalformedFilesGiveParseErrorWithPathAndLine) {
-  expect_parse_error(fixture_path("graphs/mixed.g2o"), 4, "mixed formats: TORO tag EDGE2 in a g2o file (g2o since line 1)");
-  expect_parse_error(fixture_path("graphs/duplicate_vertex.g2o"), 4, "duplicate vertex id 0 (first on line 1)");
-  expect_parse_error(fixture_path("graphs/short_edge.toro"), 2, "EDGE2: expected 11 values");
-  expect_parse_error(fixture_path("graphs/short_edge.toro"), 2, "got 10");
-  expect_parse_error(fixture_path("graphs/nan_information.g2o"), 2, "NaN in I13");
-  expect_parse_error(fixture_path("graphs/bad_id.g2o"), 2, "vertex id is not an integer: '1.5'");
-  expect_parse_error(fixture_path("graphs/empty_fix.g2o"), 2, "FIX: expected at least one vertex id");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/mixed.g2o"), 4, "mixed formats: TORO tag EDGE2 in a g2o file (g2o since line 1)");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/duplicate_vertex.g2o"), 4, "duplicate vertex id 0 (first on line 1)");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/short_edge.toro"), 2, "EDGE2: expected 11 values");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/short_edge.toro"), 2, "got 10");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/nan_information.g2o"), 2, "NaN in I13");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/bad_id.g2o"), 2, "vertex id is not an integer: '1.5'");
+  expect_parse_error(read_pose_graph, fixture_path("graphs/empty_fix.g2o"), 2, "FIX: expected at least one vertex id");
 }
 
 TEST(PoseGraphIo, MissingFileGivesErrorNamingThePath) {

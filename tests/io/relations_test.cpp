@@ -16,22 +16,7 @@ namespace {
 
 using test::fixture_path;
 using test::TempDir;
-
-// Runs `read` and checks it throws ParseError at `line` whose what() starts "PATH:LINE: " and
-// whose message contains `needle`.
-template <typename Read>
-void expect_parse_error(Read read, const std::string& path, std::size_t line, const std::string& needle) {
-  try {
-    read(path);
-    FAIL() << "no ParseError for " << path;
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.path(), path);
-    EXPECT_EQ(e.line(), line);
-    const std::string what = e.what();
-    EXPECT_EQ(what.rfind(path + ":" + std::to_string(line) + ": ", 0), 0u) << what;
-    EXPECT_NE(e.message().find(needle), std::string::npos) << what;
-  }
-}
+using test::expect_parse_error;
 
 void expect_same(const std::vector<Relation>& actual, const std::vector<Relation>& expected) {
   ASSERT_EQ(actual.size(), expected.size());

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "slam2d/core/error.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d::test {
@@ -49,6 +50,22 @@ std::optional<double> json_number(const std::string& json, const std::string& ke
 
 /// Number of non-empty, non-comment lines in a text file.
 std::size_t count_data_lines(const std::string& path);
+
+/// Checks that read(path) throws ParseError for `path` at `line`, whose what() starts with
+/// "PATH:LINE: " and whose message contains `needle`.
+template <typename Read>
+void expect_parse_error(Read&& read, const std::string& path, std::size_t line, const std::string& needle) {
+  try {
+    read(path);
+    ADD_FAILURE() << "no ParseError for " << path;
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_EQ(e.line(), line);
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path + ":" + std::to_string(line) + ": ", 0), 0u) << what;
+    EXPECT_NE(e.message().find(needle), std::string::npos) << what;
+  }
+}
 
 ::testing::AssertionResult poses_near(const SE2& actual, const SE2& expected, double translation_tolerance,
                                       double angle_tolerance);
