@@ -32,6 +32,10 @@ class ParseError : public Error {
 inline void check(bool condition, const std::string& message) {
   if (!condition) throw Error(message);
 }
+/// The same for a literal message: builds no string unless the check fails (for hot paths).
+inline void check(bool condition, const char* message) {
+  if (!condition) throw Error(message);
+}
 
 }  // namespace slam2d
 
