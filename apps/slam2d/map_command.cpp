@@ -18,6 +18,10 @@ void add_map_command(CLI::App& app) {
       ->check(CLI::IsMember(map_methods()))
       ->capture_default_str();
   command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
+  command->add_flag("--no-odometry", options->no_odometry, "hector: ignore the log's odometry (initial guess: the last pose)");
+  command->add_option("--levels", options->levels, "hector: map pyramid levels")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

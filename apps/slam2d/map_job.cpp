@@ -14,6 +14,7 @@
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/slam/hector/hector_slam.hpp"
 
 namespace slam2d::cli {
 
@@ -27,30 +28,59 @@ struct MappingRun {
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
 };
 
-// Odometry mapping: every scan is placed at the robot's odometry pose at its stamp.
-MappingRun map_with_odometry(const MapJobOptions& options) {
+// Streams the log's laser scans to `add_scan(laser)` (which returns the robot pose it estimated),
+// with the progress line; fills every field of the run but the map.
+template <typename AddScan>
+MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
   CarmenReader reader(options.log);
-  OccupancyGrid grid(OccupancyGridConfig{.resolution = options.resolution});
   Progress progress("map", options.quiet);
   MappingRun run;
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr) continue;
-    if (!laser->has_poses) {
-      throw ParseError(reader.path(), laser->line, laser->type + " carries no odometry pose; the odometry method needs FLASER, RLASER or ROBOTLASER1");
+    if (!laser->has_poses && !options.no_odometry) {
+      throw ParseError(reader.path(), laser->line,
+                       laser->type + " carries no odometry pose; use FLASER, RLASER or ROBOTLASER1 logs, or --no-odometry");
     }
-    grid.integrate_scan(laser->scan, laser->odom_pose);
-    run.trajectory.push_back(laser->scan.stamp, laser->odom_pose);
+    run.trajectory.push_back(laser->scan.stamp, add_scan(*laser));
     if (run.trajectory.size() % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans", run.trajectory.size()));
     }
   }
   progress.finish();
   check(!run.trajectory.empty(), reader.path() + ": no laser scans in the log");
-  run.map = grid.to_occupancy_map();
   run.backwards_timestamps = reader.stats().backwards_laser_timestamps;
   run.skipped_lines = reader.stats().skipped_lines;
   run.data_duration = run.trajectory.back().stamp - run.trajectory.front().stamp;
+  return run;
+}
+
+// Odometry mapping: every scan is placed at the robot's odometry pose at its stamp.
+MappingRun map_with_odometry(const MapJobOptions& options) {
+  check(!options.no_odometry, "map: the odometry method needs odometry (drop --no-odometry)");
+  OccupancyGrid grid(OccupancyGridConfig{.resolution = options.resolution});
+  MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
+    grid.integrate_scan(laser.scan, laser.odom_pose);
+    return laser.odom_pose;
+  });
+  run.map = grid.to_occupancy_map();
+  return run;
+}
+
+// Hector SLAM (Kohlbrecher et al. 2011): scan-to-map matching on a map pyramid, odometry as the
+// initial guess unless --no-odometry. The map written is the finest pyramid level.
+MappingRun map_with_hector(const MapJobOptions& options) {
+  HectorSlamConfig config;
+  config.map.levels = options.levels;
+  config.map.grid.resolution = options.resolution;
+  config.prior = options.no_odometry ? MotionPrior::kLastPose : MotionPrior::kOdometry;
+  HectorSlam slam(config);
+  MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
+    HectorInputs inputs;
+    if (!options.no_odometry) inputs.T_odom_robot = laser.odom_pose;
+    return slam.add_scan(laser.scan, inputs).T_map_robot;
+  });
+  run.map = slam.map().level(0).to_occupancy_map();
   return run;
 }
 
@@ -72,17 +102,18 @@ void write_outputs(const std::filesystem::path& dir, const MappingRun& run, cons
 }  // namespace
 
 const std::vector<std::string>& map_methods() {
-  static const std::vector<std::string> methods{"odometry"};
+  static const std::vector<std::string> methods{"odometry", "hector"};
   return methods;
 }
 
 MapJobResult run_map_job(const MapJobOptions& options) {
   const auto& methods = map_methods();
   check(std::find(methods.begin(), methods.end(), options.method) != methods.end(),
-        "map: unknown method '" + options.method + "' (known: odometry)");
+        "map: unknown method '" + options.method + "' (known: odometry, hector)");
   check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
+  check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
   const RunClock clock;
-  MappingRun run = map_with_odometry(options);
+  MappingRun run = options.method == "hector" ? map_with_hector(options) : map_with_odometry(options);
   const double cpu = clock.cpu_seconds();
   const double wall = clock.wall_seconds();
 
@@ -91,6 +122,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("data_duration_s", run.data_duration).add("cpu_s", cpu).add("wall_s", wall);
   summary.add("realtime_factor", cpu > 0.0 ? std::optional<double>(run.data_duration / cpu) : std::nullopt);
   summary.add("us_per_scan", 1e6 * cpu / static_cast<double>(run.trajectory.size()));
+  if (options.method == "hector") summary.add("odometry", !options.no_odometry).add("levels", options.levels);
   summary.add("resolution", options.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("peak_rss_mb", peak_rss_mb());

@@ -13,8 +13,10 @@ namespace slam2d::cli {
 struct MapJobOptions {
   std::string log;                  // CARMEN log, plain or .gz
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
-  std::string method = "odometry";  // odometry
+  std::string method = "odometry";  // odometry, hector
   double resolution = 0.05;         // m per cell
+  bool no_odometry = false;         // hector: ignore the log's odometry (the last pose is the initial guess)
+  int levels = 3;                   // hector: map pyramid levels, in [1, 16]
   bool quiet = false;               // no progress line
 };
 

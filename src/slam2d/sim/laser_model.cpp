@@ -9,7 +9,7 @@ namespace slam2d {
 
 void validate(const LaserModelConfig& config) {
   const double fields[] = {config.field_of_view, config.range_max, config.range_noise_sigma,
-                           config.dropout_probability, config.rate_hz};
+                           config.dropout_probability, config.rate_hz, config.sweep_duration};
   for (const double f : fields) check(std::isfinite(f), "laser model: every parameter must be finite");
   check(config.T_robot_sensor.vector().allFinite(), "laser model: T_robot_sensor must be finite");
   check(config.beams >= 2, "laser model: beams must be >= 2");
@@ -20,6 +20,7 @@ void validate(const LaserModelConfig& config) {
   check(config.dropout_probability >= 0.0 && config.dropout_probability <= 1.0,
         "laser model: dropout_probability must be in [0, 1]");
   check(config.rate_hz > 0.0, "laser model: rate_hz must be > 0");
+  check(config.sweep_duration >= 0.0, "laser model: sweep_duration must be >= 0");
 }
 
 double beam_increment(const LaserModelConfig& config) {
@@ -29,6 +30,13 @@ double beam_increment(const LaserModelConfig& config) {
 
 LaserScan simulate_scan(const RayCaster& caster, const SE2& T_world_robot, double stamp,
                         const LaserModelConfig& config, Rng& rng) {
+  LaserModelConfig instantaneous = config;
+  instantaneous.sweep_duration = 0.0;
+  return simulate_sweep(caster, [&T_world_robot](double) { return T_world_robot; }, stamp, instantaneous, rng);
+}
+
+LaserScan simulate_sweep(const RayCaster& caster, const std::function<SE2(double)>& T_world_robot_at, double stamp,
+                         const LaserModelConfig& config, Rng& rng) {
   LaserScan scan;
   scan.stamp = stamp;
   scan.angle_min = -0.5 * config.field_of_view;
@@ -37,8 +45,12 @@ LaserScan simulate_scan(const RayCaster& caster, const SE2& T_world_robot, doubl
   scan.range_max = config.range_max;
   scan.T_robot_sensor = config.T_robot_sensor;
   scan.ranges.resize(static_cast<std::size_t>(config.beams));
-  const SE2 T_world_sensor = T_world_robot * config.T_robot_sensor;
+  const double beam_interval = config.sweep_duration / static_cast<double>(config.beams - 1);  // s
+  SE2 T_world_sensor = T_world_robot_at(stamp) * config.T_robot_sensor;
   for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
+    if (config.sweep_duration > 0.0 && i > 0) {
+      T_world_sensor = T_world_robot_at(stamp + static_cast<double>(i) * beam_interval) * config.T_robot_sensor;
+    }
     const bool dropout = rng.bernoulli(config.dropout_probability);
     const double noise = rng.gaussian(0.0, config.range_noise_sigma);
     const auto hit = caster.cast(T_world_sensor.translation(), T_world_sensor.theta() + scan.angle(i), config.range_max);

@@ -1,13 +1,15 @@
 #pragma once
 // A planar laser range finder in the style of a SICK LMS 200 as logged by CARMEN: beams over the
 // field of view, Gaussian range noise, random dropouts, and "no return" reported as range_max.
-// The scan is taken at one instant (no motion distortion during the sweep).
+// By default the scan is taken at one instant; with sweep_duration > 0 the beams are taken one
+// after the other while the robot moves (motion distortion, for testing its correction).
 //
 // Beam angles follow the CARMEN FLASER convention, so a written log reads back with the same
 // angles: angle_min = -field_of_view / 2; an even beam count splits the field of view into
 // `beams` equal steps (180 beams: -90 deg .. +89 deg), an odd one puts beams at both ends
 // (181 beams: -90 deg .. +90 deg).
 
+#include <functional>
 #include <numbers>
 
 #include "slam2d/core/laser_scan.hpp"
@@ -25,18 +27,25 @@ struct LaserModelConfig {
   double dropout_probability = 0.005;          // 1, chance that a beam returns nothing
   double rate_hz = 10.0;                       // Hz, scans per second
   SE2 T_robot_sensor;                          // the sensor's mounting pose on the robot
+  double sweep_duration = 0.0;                 // s, first to last beam, >= 0; 0 = all beams at the stamp
 };
 
 /// Throws Error for beams < 2, a field of view outside (0, 2 pi], range_max <= 0, negative noise,
-/// a dropout probability outside [0, 1], rate_hz <= 0, or non-finite values.
+/// a dropout probability outside [0, 1], rate_hz <= 0, a negative sweep_duration, or non-finite values.
 void validate(const LaserModelConfig& config);
 
 /// Angle between beams (rad) by the convention above.
 double beam_increment(const LaserModelConfig& config);
 
-/// A scan from the robot pose T_world_robot. Each beam draws its dropout and its noise from `rng`
+/// A scan from the robot pose T_world_robot, all beams at once (config.sweep_duration is ignored). Each beam draws its dropout and its noise from `rng`
 /// in beam order (two draws per beam whatever happens), so the stream does not depend on the world.
 LaserScan simulate_scan(const RayCaster& caster, const SE2& T_world_robot, double stamp,
                         const LaserModelConfig& config, Rng& rng);
+
+/// A sweep taken while the robot moves: beam i is cast from T_world_robot_at(stamp + t_i), with
+/// t_i = i * config.sweep_duration / (beams - 1). Same noise draws as simulate_scan; with
+/// sweep_duration = 0 every beam is cast from T_world_robot_at(stamp), as simulate_scan does.
+LaserScan simulate_sweep(const RayCaster& caster, const std::function<SE2(double)>& T_world_robot_at, double stamp,
+                         const LaserModelConfig& config, Rng& rng);
 
 }  // namespace slam2d

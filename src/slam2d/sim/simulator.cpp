@@ -118,7 +118,9 @@ void Simulation::laser_tick(double stamp, const SE2& T_world_robot) {
   const SE2 odom_now = odom_pose_ * corrupt_motion(truth_at_odom_.between(T_world_robot), config_.odometry, nullptr);
   LaserMessage laser;
   laser.type = "FLASER";
-  laser.scan = simulate_scan(caster_, T_world_robot, stamp, config_.laser, laser_rng_);
+  // A sweep with duration keeps the current velocity command over its beams.
+  laser.scan = simulate_sweep(
+      caster_, [&](double t) { return t == stamp ? T_world_robot : true_pose_at(t); }, stamp, config_.laser, laser_rng_);
   laser.field_of_view = config_.laser.field_of_view;
   laser.laser_pose = odom_now;
   laser.odom_pose = odom_now;

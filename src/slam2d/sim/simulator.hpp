@@ -13,6 +13,8 @@
 // follows the exact constant-velocity arc. The odometry starts at the true start pose (the
 // odometry frame is the world frame at t = 0) and is integrated over each ODOM interval; a scan
 // between two ODOM messages gets the last one plus the noise-free part of the motion since.
+// With laser.sweep_duration > 0 the beams of a scan are taken over that time along the robot's
+// constant-velocity arc (the command held at the scan's stamp); TRUEPOS is the pose at the stamp.
 
 #include <cstdint>
 #include <string>

@@ -1,0 +1,65 @@
+#include "slam2d/grid/bilinear.hpp"
+
+#include <cmath>
+
+namespace slam2d {
+
+namespace {
+
+using CellGrid = TiledGrid<OccupancyCell>;
+
+// P(occupied) in single precision (expf is several times faster than exp; the cells hold float
+// log-odds anyway): within 1e-7 of probability_from_log_odds.
+double cell_probability(const OccupancyCell& cell) {
+  return cell.last_scan == 0 ? 0.5 : static_cast<double>(1.0f / (1.0f + std::exp(-cell.log_odds)));
+}
+
+}  // namespace
+
+BilinearCorner bilinear_corner(const GridGeometry& geometry, const Eigen::Vector2d& point) {
+  // Continuous index of the point with the samples (cell centres) at integer positions.
+  const double u = (point.x() - geometry.origin.x()) / geometry.resolution - 0.5;
+  const double v = (point.y() - geometry.origin.y()) / geometry.resolution - 0.5;
+  const int i = GridGeometry::floor_to_int(u);
+  const int j = GridGeometry::floor_to_int(v);
+  return {CellIndex{i, j}, Eigen::Vector2d(u - i, v - j)};
+}
+
+BilinearSample bilinear_blend(double m00, double m10, double m01, double m11, const Eigen::Vector2d& fraction,
+                              double resolution) {
+  const double fx = fraction.x();
+  const double fy = fraction.y();
+  BilinearSample sample;
+  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);  // Eq. (4)
+  sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / resolution;                // Eq. (5)
+  sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / resolution;                // Eq. (6)
+  return sample;
+}
+
+BilinearSample interpolate_occupancy(const OccupancyGrid& grid, const Eigen::Vector2d& point) {
+  const GridGeometry& geometry = grid.geometry();
+  if (!geometry.in_index_range(point, GridGeometry::kMaxCellIndex - 2.0)) return {0.5, Eigen::Vector2d::Zero()};
+  const BilinearCorner c = bilinear_corner(geometry, point);
+  const CellIndex i = c.cell;
+  const CellGrid& cells = grid.cells();
+  constexpr int kMask = CellGrid::kTileSize - 1;
+  double m00, m10, m01, m11;
+  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
+    // Fast path: the four cells share a tile (63 squares in 64 along each axis).
+    const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
+    if (tile == nullptr) return {0.5, Eigen::Vector2d::Zero()};
+    const int offset = CellGrid::offset_in_tile(i);
+    m00 = cell_probability(tile->cells[offset]);
+    m10 = cell_probability(tile->cells[offset + 1]);
+    m01 = cell_probability(tile->cells[offset + CellGrid::kTileSize]);
+    m11 = cell_probability(tile->cells[offset + CellGrid::kTileSize + 1]);
+  } else {
+    m00 = cell_probability(cells.at(i));
+    m10 = cell_probability(cells.at({i.x + 1, i.y}));
+    m01 = cell_probability(cells.at({i.x, i.y + 1}));
+    m11 = cell_probability(cells.at({i.x + 1, i.y + 1}));
+  }
+  return bilinear_blend(m00, m10, m01, m11, c.fraction, geometry.resolution);
+}
+
+}  // namespace slam2d

@@ -1,0 +1,36 @@
+#include "slam2d/grid/map_pyramid.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+MapPyramid::MapPyramid(const MapPyramidConfig& config) : config_(config) {
+  check(config.levels >= 1 && config.levels <= 16,
+        "MapPyramidConfig: levels must be in [1, 16], got " + std::to_string(config.levels));
+  grids_.reserve(static_cast<std::size_t>(config.levels));
+  for (int k = 0; k < config.levels; ++k) {
+    OccupancyGridConfig grid = config.grid;
+    grid.resolution = std::ldexp(config.grid.resolution, k);  // r 2^k, exact
+    grids_.emplace_back(grid);
+  }
+}
+
+void MapPyramid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot) {
+  for (OccupancyGrid& grid : grids_) grid.integrate_scan(scan, T_map_robot);
+}
+
+const OccupancyGrid& MapPyramid::level(int k) const {
+  check(k >= 0 && k < levels(), "MapPyramid::level: no level " + std::to_string(k));
+  return grids_[static_cast<std::size_t>(k)];
+}
+
+std::size_t MapPyramid::memory_bytes() const {
+  std::size_t bytes = sizeof(*this);
+  for (const OccupancyGrid& grid : grids_) bytes += grid.memory_bytes();
+  return bytes;
+}
+
+}  // namespace slam2d

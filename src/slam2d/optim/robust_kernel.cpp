@@ -1,0 +1,56 @@
+#include "slam2d/optim/robust_kernel.hpp"
+
+#include <cmath>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+double huber_weight(double residual, double scale) {
+  const double a = std::abs(residual);
+  return a <= scale ? 1.0 : scale / a;
+}
+
+double cauchy_weight(double residual, double scale) {
+  const double u = residual / scale;
+  return 1.0 / (1.0 + u * u);
+}
+
+double tukey_weight(double residual, double scale) {
+  const double u = residual / scale;
+  if (std::abs(u) > 1.0) return 0.0;
+  const double v = 1.0 - u * u;
+  return v * v;
+}
+
+double RobustKernel::weight(double residual) const {
+  switch (type) {
+    case RobustKernelType::kHuber: return huber_weight(residual, scale);
+    case RobustKernelType::kCauchy: return cauchy_weight(residual, scale);
+    case RobustKernelType::kTukey: return tukey_weight(residual, scale);
+    case RobustKernelType::kNone: break;
+  }
+  return 1.0;
+}
+
+double RobustKernel::cost(double residual) const {
+  const double k = scale;
+  const double a = std::abs(residual);
+  switch (type) {
+    case RobustKernelType::kHuber: return a <= k ? 0.5 * a * a : k * (a - 0.5 * k);
+    case RobustKernelType::kCauchy: return 0.5 * k * k * std::log1p((a / k) * (a / k));
+    case RobustKernelType::kTukey: {
+      if (a > k) return k * k / 6.0;
+      const double v = 1.0 - (a / k) * (a / k);
+      return k * k / 6.0 * (1.0 - v * v * v);
+    }
+    case RobustKernelType::kNone: break;
+  }
+  return 0.5 * a * a;
+}
+
+void validate(const RobustKernel& kernel) {
+  check(std::isfinite(kernel.scale) && kernel.scale > 0.0, "RobustKernel: scale must be finite and positive");
+}
+
+}  // namespace slam2d

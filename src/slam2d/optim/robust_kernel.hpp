@@ -1,0 +1,37 @@
+#pragma once
+// Robust kernels for iteratively reweighted least squares: P. J. Huber, "Robust estimation of a
+// location parameter", Ann. Math. Statist. 35(1), 1964; the Cauchy (Lorentzian) and Tukey
+// biweight kernels as tabulated in Z. Zhang, "Parameter estimation techniques: a tutorial with
+// application to conic fitting", Image and Vision Computing 15(1), 1997, Table 1.
+//
+// A kernel replaces the squared residual r^2 / 2 by rho(r). Gauss-Newton with IRLS weights
+// w(r) = rho'(r) / r minimises sum rho(r_i): each residual enters the normal equations as
+// H += w J^T J, b += w J^T r (normal_equations.hpp). `scale` (k) is in the residual's unit.
+
+namespace slam2d {
+
+enum class RobustKernelType {
+  kNone,    // rho = r^2 / 2, w = 1
+  kHuber,   // quadratic for |r| <= k, linear beyond
+  kCauchy,  // rho = k^2 / 2 log(1 + (r / k)^2)
+  kTukey,   // biweight: w = (1 - (r / k)^2)^2 for |r| <= k, 0 beyond
+};
+
+struct RobustKernel {
+  RobustKernelType type = RobustKernelType::kNone;
+  double scale = 1.0;  // k, in the residual's unit, > 0
+
+  /// The IRLS weight rho'(r) / r, in [0, 1].
+  double weight(double residual) const;
+  /// The cost rho(r); r^2 / 2 for kNone, so all kernels agree with it near r = 0.
+  double cost(double residual) const;
+};
+
+double huber_weight(double residual, double scale);
+double cauchy_weight(double residual, double scale);
+double tukey_weight(double residual, double scale);
+
+/// Throws Error for a non-finite or non-positive scale.
+void validate(const RobustKernel& kernel);
+
+}  // namespace slam2d

@@ -1,0 +1,158 @@
+#include "slam2d/slam/hector/hector_slam.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+namespace {
+
+bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
+
+// The scan with each reading scaled to its horizontal length under the attitude (bearings kept:
+// their change is second order in roll and pitch), for the map update of a tilted scan.
+LaserScan levelled_scan(const LaserScan& scan, const Attitude& attitude) {
+  LaserScan levelled = scan;
+  const double theta = scan.T_robot_sensor.theta();
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const double a = theta + scan.angle(i);
+    const auto projected = project_to_horizontal({Eigen::Vector2d(std::cos(a), std::sin(a))}, attitude);
+    levelled.ranges[i] = scan.ranges[i] * projected.front().norm();
+  }
+  return levelled;
+}
+
+}  // namespace
+
+void validate(const HectorSlamConfig& config) {
+  check(non_negative(config.min_range) && std::isfinite(config.max_range) && config.max_range > config.min_range,
+        "HectorSlamConfig: need 0 <= min_range < max_range");
+  check(non_negative(config.update_distance) && non_negative(config.update_angle),
+        "HectorSlamConfig: update thresholds must be finite and >= 0");
+  check(non_negative(config.max_prior_dt), "HectorSlamConfig: max_prior_dt must be finite and >= 0");
+  check(non_negative(config.sweep_duration), "HectorSlamConfig: sweep_duration must be finite and >= 0");
+  check(non_negative(config.prior_information_translation) && non_negative(config.prior_information_rotation),
+        "HectorSlamConfig: prior information must be finite and >= 0");
+  check(non_negative(config.recovery_residual) && non_negative(config.recovery_residual_without_odometry),
+        "HectorSlamConfig: recovery residuals must be finite and >= 0");
+  check(non_negative(config.rotation_margin_without_odometry) && config.rotation_margin_without_odometry < 1.0,
+        "HectorSlamConfig: rotation_margin_without_odometry must be in [0, 1)");
+  check(non_negative(config.rotation_search_without_odometry),
+        "HectorSlamConfig: rotation_search_without_odometry must be finite and >= 0");
+  validate(config.matcher);
+}
+
+HectorSlam::HectorSlam(const HectorSlamConfig& config) : config_(config), map_(config.map) {
+  validate(config_);
+  if (config_.prior != MotionPrior::kOdometry) {
+    config_.matcher.rotation_search_range = config_.rotation_search_without_odometry;
+    config_.matcher.rotation_search_margin = config_.rotation_margin_without_odometry;
+    config_.recovery_residual = config_.recovery_residual_without_odometry;
+  }
+  validate(config_.matcher);
+}
+
+HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& inputs) {
+  check(config_.prior != MotionPrior::kOdometry || inputs.T_odom_robot.has_value(),
+        "HectorSlam: the odometry prior needs an odometry pose with every scan");
+  HectorStep step;
+  step.prediction = predict(scan, inputs);
+  step.T_map_robot = step.prediction;
+  LaserScan corrected = scan;
+  if (config_.sweep_duration > 0.0) {
+    corrected = correct_rotational_distortion(scan, angular_rate(scan, inputs, step.prediction), config_.sweep_duration);
+  }
+  if (last_pose_) {  // Sec. IV-B/C: match against the map built so far
+    step.match = match(scan, corrected, inputs, step.prediction);
+    step.matched = true;
+    step.T_map_robot = step.match.T_map_robot;
+    step.covariance = step.match.covariance;
+  }
+  if (!last_pose_ || needs_map_update(step.T_map_robot)) {
+    integrate(corrected, inputs, step.T_map_robot);
+    step.map_updated = true;
+  }
+  previous_dt_ = last_pose_ ? scan.stamp - last_stamp_ : 0.0;
+  previous_pose_ = last_pose_;
+  last_pose_ = step.T_map_robot;
+  last_stamp_ = scan.stamp;
+  last_odom_ = inputs.T_odom_robot;
+  trajectory_.push_back(scan.stamp, step.T_map_robot);
+  return step;
+}
+
+HectorMatchResult HectorSlam::match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
+                                    const SE2& prediction) const {
+  std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
+  if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
+  const std::optional<PosePrior> prior = pose_prior(scan, inputs);
+  HectorMatchResult result = match_scan_to_pyramid(map_, points, prediction, config_.matcher, prior);
+  if (result.mean_squared_residual > config_.recovery_residual) {
+    // A poor fit (e.g. the robot turned during a gap in the log): retry over every heading.
+    HectorMatcherConfig wide = config_.matcher;
+    wide.rotation_search_range = std::numbers::pi;
+    HectorMatchResult retry = match_scan_to_pyramid(map_, points, prediction, wide, prior);
+    if (retry.equations.cost < result.equations.cost) result = std::move(retry);
+  }
+  return result;
+}
+
+// The Gaussian prior at the motion prediction (constant velocity when the guess is the last pose).
+std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan, const HectorInputs& inputs) const {
+  if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
+  const MotionPrior model = config_.prior == MotionPrior::kLastPose ? MotionPrior::kConstantVelocity : config_.prior;
+  const Eigen::Vector3d information(config_.prior_information_translation, config_.prior_information_translation,
+                                    config_.prior_information_rotation);
+  return PosePrior{.mean = predict(scan, inputs, model), .information = information.asDiagonal()};
+}
+
+SE2 HectorSlam::predict(const LaserScan& scan, const HectorInputs& inputs) const {
+  return predict(scan, inputs, config_.prior);
+}
+
+SE2 HectorSlam::predict(const LaserScan& scan, const HectorInputs& inputs, MotionPrior prior) const {
+  if (!last_pose_) return SE2::identity();
+  switch (prior) {
+    case MotionPrior::kOdometry:
+      if (last_odom_ && inputs.T_odom_robot) return *last_pose_ * last_odom_->between(*inputs.T_odom_robot);
+      return *last_pose_;
+    case MotionPrior::kConstantVelocity: {
+      // The last motion, scaled to this time step; the scale is clamped to [0.5, 2] (and 1 when a
+      // stamp steps back) so that out-of-order or jittery stamps cannot blow the extrapolation up.
+      const double dt = scan.stamp - last_stamp_;
+      if (!previous_pose_ || dt > config_.max_prior_dt) return *last_pose_;
+      const double scale = dt > 0.0 && previous_dt_ > 0.0 ? std::clamp(dt / previous_dt_, 0.5, 2.0) : 1.0;
+      return *last_pose_ * SE2::exp(previous_pose_->between(*last_pose_).log() * scale);
+    }
+    case MotionPrior::kLastPose: break;
+  }
+  return *last_pose_;
+}
+
+// rad/s: the IMU's rate if given, else the predicted rotation since the last scan over its time step.
+double HectorSlam::angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const {
+  if (inputs.angular_rate) return *inputs.angular_rate;
+  const double dt = scan.stamp - last_stamp_;
+  if (!last_pose_ || dt <= 0.0 || dt > config_.max_prior_dt) return 0.0;
+  return angle_difference(prediction.theta(), last_pose_->theta()) / dt;
+}
+
+bool HectorSlam::needs_map_update(const SE2& T_map_robot) const {
+  const SE2 motion = last_update_pose_.between(T_map_robot);
+  return motion.translation().norm() > config_.update_distance || std::abs(motion.theta()) > config_.update_angle;
+}
+
+void HectorSlam::integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot) {
+  LaserScan usable = inputs.attitude ? levelled_scan(scan, *inputs.attitude) : scan;
+  usable.range_min = std::max(usable.range_min, config_.min_range);
+  map_.integrate_scan(usable, T_map_robot);
+  last_update_pose_ = T_map_robot;
+  ++map_updates_;
+}
+
+}  // namespace slam2d

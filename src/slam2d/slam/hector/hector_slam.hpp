@@ -1,0 +1,115 @@
+#pragma once
+// Hector SLAM: S. Kohlbrecher, O. von Stryk, J. Meyer, U. Klingauf, "A flexible and scalable SLAM
+// system with full 3D motion estimation", SSRR 2011 (the 2D part, Sec. IV).
+//
+// For every scan: predict the pose (odometry delta, constant velocity or the last pose), optionally
+// correct the sweep's rotational distortion and level the scan with an IMU attitude, match the
+// end points against the map pyramid coarse to fine (scan_matcher.hpp), and integrate the scan
+// into every level when the pose moved more than a distance or angle threshold since the last
+// map update. No loop closure: the map is built once, scan by scan. Deterministic.
+
+#include <optional>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/core/trajectory.hpp"
+#include "slam2d/grid/map_pyramid.hpp"
+#include "slam2d/slam/hector/scan_matcher.hpp"
+#include "slam2d/slam/hector/scan_preprocessing.hpp"
+
+namespace slam2d {
+
+enum class MotionPrior {
+  kOdometry,          // last estimate * (odometry delta since the last scan); needs odometry poses
+  kConstantVelocity,  // last estimate * (the last estimated motion, scaled to the time step)
+  kLastPose,          // the last estimate (Hector's default without odometry)
+};
+
+struct HectorSlamConfig {
+  // The map pyramid: 3 levels from 5 cm; Hector's update factors p_hit 0.9 / p_miss 0.4. Readings at
+  // or beyond max_range are no-return beams; they clear nothing (max_clear_range 0), as in Hector.
+  MapPyramidConfig map{.levels = 3,
+                       .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4,
+                                .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0,
+                                .max_range = 25.0}};
+  HectorMatcherConfig matcher{};
+  double min_range = 0.1;          // m, shorter readings are dropped (robot body, dust)
+  double max_range = 25.0;         // m, usable range for matching and mapping; longer readings are no-return
+  double update_distance = 0.4;    // m, map update when the pose moved more than this since the last one
+  double update_angle = 0.9;       // rad, ... or turned more than this (Hector's defaults, kept: see docs)
+  MotionPrior prior = MotionPrior::kOdometry;
+  double max_prior_dt = 1.0;       // s, constant velocity is not extrapolated over longer gaps (last pose instead)
+  double sweep_duration = 0.0;     // s, first to last beam; > 0 enables the rotational distortion correction
+  // A weak Gaussian prior at the motion prediction (odometry, or constant velocity when the
+  // initial guess is the last pose) added to the matching (not in the paper): it decides the
+  // directions the scan leaves open. 0 disables it.
+  double prior_information_translation = 0.0;  // 1/m^2, >= 0
+  double prior_information_rotation = 0.0;     // 1/rad^2, >= 0
+  // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
+  // retried with a rotation search over every heading, and the better fit is kept.
+  double recovery_residual = 1.0;   // 1, >= 0; 1 never triggers (the residual is at most 1)
+  // Without odometry (prior != kOdometry) these replace the settings above and the matcher's:
+  // the robot may have turned far between two scans (or during a gap in the log), and in round
+  // halls near-equal costs must not pull the heading away from the guess.
+  double rotation_search_without_odometry = 0.4;   // rad, for matcher.rotation_search_range
+  double rotation_margin_without_odometry = 0.1;   // 1, for matcher.rotation_search_margin
+  double recovery_residual_without_odometry = 0.25;  // 1, for recovery_residual
+};
+
+/// Extra inputs of one scan.
+struct HectorInputs {
+  std::optional<SE2> T_odom_robot{};    // the odometry pose at the scan (kOdometry prior, angular rate)
+  std::optional<Attitude> attitude{};   // IMU roll/pitch: the end points are levelled before matching
+  std::optional<double> angular_rate{}; // rad/s, IMU yaw rate for the distortion correction
+};
+
+struct HectorStep {
+  SE2 T_map_robot;
+  Covariance3 covariance = Covariance3::Zero();  // from the Gauss-Newton Hessian; zero on the first scan
+  SE2 prediction;                                // the matcher's initial guess
+  HectorMatchResult match;                       // empty on the first scan
+  bool matched = false;                          // false on the first scan (no map yet)
+  bool map_updated = false;
+};
+
+/// Throws Error for negative or non-finite ranges/thresholds, min_range >= max_range, or an invalid
+/// map or matcher configuration.
+void validate(const HectorSlamConfig& config);
+
+class HectorSlam {
+ public:
+  explicit HectorSlam(const HectorSlamConfig& config = {});
+
+  /// Processes one scan. Throws Error when config.prior is kOdometry and no odometry pose is given.
+  HectorStep add_scan(const LaserScan& scan, const HectorInputs& inputs = {});
+
+  const MapPyramid& map() const { return map_; }
+  /// One pose per scan added, in order, stamped with the scan's stamp.
+  const Trajectory& trajectory() const { return trajectory_; }
+  std::size_t map_updates() const { return map_updates_; }
+  const HectorSlamConfig& config() const { return config_; }
+
+ private:
+  HectorMatchResult match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
+                          const SE2& prediction) const;
+  std::optional<PosePrior> pose_prior(const LaserScan& scan, const HectorInputs& inputs) const;
+  SE2 predict(const LaserScan& scan, const HectorInputs& inputs) const;
+  SE2 predict(const LaserScan& scan, const HectorInputs& inputs, MotionPrior prior) const;
+  double angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const;
+  bool needs_map_update(const SE2& T_map_robot) const;
+  void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
+
+  HectorSlamConfig config_;
+  MapPyramid map_;
+  Trajectory trajectory_;
+  std::optional<SE2> last_odom_;       // odometry pose at the previous scan
+  std::optional<SE2> last_pose_;       // estimate at the previous scan
+  std::optional<SE2> previous_pose_;   // estimate at the scan before that
+  double last_stamp_ = 0.0;
+  double previous_dt_ = 0.0;           // s, between the two previous scans
+  SE2 last_update_pose_;
+  std::size_t map_updates_ = 0;
+};
+
+}  // namespace slam2d

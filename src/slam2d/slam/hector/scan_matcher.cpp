@@ -1,0 +1,162 @@
+#include "slam2d/slam/hector/scan_matcher.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/grid/bilinear.hpp"
+
+namespace slam2d {
+
+void validate(const HectorMatcherConfig& config) {
+  check(config.coarse_iterations >= 1 && config.fine_iterations >= 1,
+        "HectorMatcherConfig: iteration counts must be >= 1");
+  check(std::isfinite(config.max_rotation_step) && config.max_rotation_step > 0.0 &&
+            std::isfinite(config.max_translation_step) && config.max_translation_step > 0.0,
+        "HectorMatcherConfig: max_rotation_step and max_translation_step must be positive");
+  check(std::isfinite(config.convergence_step) && config.convergence_step >= 0.0,
+        "HectorMatcherConfig: convergence_step must be >= 0");
+  check(std::isfinite(config.rotation_search_range) && config.rotation_search_range >= 0.0 &&
+            std::isfinite(config.rotation_search_step) && config.rotation_search_step > 0.0,
+        "HectorMatcherConfig: rotation search range must be >= 0 and its step > 0");
+  check(config.rotation_search_margin >= 0.0 && config.rotation_search_margin < 1.0,
+        "HectorMatcherConfig: rotation_search_margin must be in [0, 1)");
+  check(config.rotation_search_range / config.rotation_search_step <= 100.0,
+        "HectorMatcherConfig: more than 201 rotation search starts");
+  if (config.kernel.type != RobustKernelType::kNone) validate(config.kernel);
+}
+
+NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                    const SE2& T_map_robot, const RobustKernel& kernel) {
+  const double c = std::cos(T_map_robot.theta());
+  const double s = std::sin(T_map_robot.theta());
+  const Eigen::Vector2d& t = T_map_robot.translation();
+  NormalEquations<3> equations;
+  for (const Eigen::Vector2d& p : points_robot) {
+    const Eigen::Vector2d S(c * p.x() - s * p.y() + t.x(), s * p.x() + c * p.y() + t.y());  // Eq. (7)
+    const BilinearSample M = interpolate_occupancy(grid, S);
+    const double r = 1.0 - M.value;
+    // grad M * dS/dxi, Eq. (14): the rotation column is dS/dpsi = (-s p_x - c p_y, c p_x - s p_y).
+    const double d_psi = M.gradient.x() * (-s * p.x() - c * p.y()) + M.gradient.y() * (c * p.x() - s * p.y());
+    const NormalEquations<3>::Row J(-M.gradient.x(), -M.gradient.y(), -d_psi);  // dr/dxi
+    equations.add(J, r, kernel.weight(r));
+  }
+  return equations;
+}
+
+void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior) {
+  Eigen::Vector3d r = T_map_robot.vector() - prior.mean.vector();
+  r.z() = normalize_angle(r.z());
+  equations.H += prior.information;  // J = I
+  equations.b += prior.information * r;
+  equations.cost += 0.5 * r.dot(prior.information * r);
+}
+
+namespace {
+
+// The covariance s^2 H^-1 with s^2 = sum r^2 / (n - 3), the residual variance; zero when singular.
+Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
+  const auto inverse = inverse_hessian(equations);
+  if (!inverse || equations.residuals <= 3) return Covariance3::Zero();
+  const double variance = 2.0 * equations.cost / static_cast<double>(equations.residuals - 3);
+  return variance * *inverse;
+}
+
+}  // namespace
+
+HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                     const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
+                                     const std::optional<PosePrior>& prior) {
+  const auto linearize = [&](const SE2& pose) {
+    NormalEquations<3> equations = hector_linearize(grid, points_robot, pose, config.kernel);
+    if (prior) add_pose_prior(equations, pose, *prior);
+    return equations;
+  };
+  HectorMatchResult result;
+  result.points = points_robot.size();
+  Eigen::Vector3d xi = T_map_robot_guess.vector();
+  result.equations = linearize(T_map_robot_guess);
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    const auto step = solve_step(result.equations);  // Eq. (12): dxi = H^-1 sum J^T (1 - M), H of Eq. (13)
+    result.degenerate = !step.has_value();
+    if (!step) break;
+    Eigen::Vector3d dxi = *step;
+    dxi.z() = std::clamp(dxi.z(), -config.max_rotation_step, config.max_rotation_step);
+    const double max_translation = config.max_translation_step * grid.geometry().resolution;
+    if (dxi.head<2>().norm() > max_translation) dxi.head<2>() *= max_translation / dxi.head<2>().norm();
+    ++result.iterations;
+    // Keep the step only if the cost drops, else halve it (a Gauss-Newton step can overshoot
+    // on a map that is far from quadratic); give up after a few halvings.
+    bool accepted = false;
+    for (int halving = 0; halving <= config.max_step_halvings && !accepted; ++halving, dxi *= 0.5) {
+      Eigen::Vector3d candidate = xi + dxi;
+      candidate.z() = normalize_angle(candidate.z());
+      NormalEquations<3> equations = linearize(SE2::from_vector(candidate));
+      if (equations.cost <= result.equations.cost) {
+        xi = candidate;
+        result.equations = equations;
+        accepted = true;
+      }
+    }
+    result.converged = !accepted || (dxi.head<2>().norm() < 2.0 * config.convergence_step &&
+                                     std::abs(dxi.z()) < 2.0 * config.convergence_step);
+    if (result.converged) break;
+  }
+  result.T_map_robot = SE2::from_vector(xi);
+  result.covariance = covariance_from_hessian(result.equations);
+  const std::size_t n = std::max<std::size_t>(result.equations.residuals, 1);
+  result.mean_squared_residual = 2.0 * result.equations.cost / static_cast<double>(n);
+  return result;
+}
+
+namespace {
+
+// The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost wins.
+HectorMatchResult match_with_rotation_search(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                             const SE2& guess, int iterations, const HectorMatcherConfig& config,
+                                             const std::optional<PosePrior>& prior) {
+  HectorMatchResult best = match_scan_to_grid(grid, points_robot, guess, iterations, config, prior);
+  const int starts = static_cast<int>(std::floor(config.rotation_search_range / config.rotation_search_step + 1e-9));
+  for (int k = -starts; k <= starts; ++k) {
+    if (k == 0) continue;
+    const SE2 start = guess * SE2(0.0, 0.0, k * config.rotation_search_step);
+    HectorMatchResult candidate = match_scan_to_grid(grid, points_robot, start, iterations, config, prior);
+    // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
+    // round hall) near-equal costs would otherwise pick a far heading at random.
+    if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost) {
+      best = std::move(candidate);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+HectorMatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
+                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
+                                        const std::optional<PosePrior>& prior) {
+  validate(config);
+  if (points_robot.empty()) {
+    HectorMatchResult result;
+    result.T_map_robot = T_map_robot_guess;
+    result.degenerate = true;
+    return result;
+  }
+  SE2 pose = T_map_robot_guess;
+  int iterations = 0;
+  for (int level = pyramid.levels() - 1; level >= 1; --level) {  // coarse to fine, Sec. IV-C
+    const HectorMatchResult coarse =
+        level == pyramid.levels() - 1
+            ? match_with_rotation_search(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior)
+            : match_scan_to_grid(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior);
+    pose = coarse.T_map_robot;
+    iterations += coarse.iterations;
+  }
+  HectorMatchResult fine =
+      match_scan_to_grid(pyramid.level(0), points_robot, pose, config.fine_iterations, config, prior);
+  fine.iterations += iterations;
+  return fine;
+}
+
+}  // namespace slam2d

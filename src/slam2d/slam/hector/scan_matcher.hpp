@@ -1,0 +1,88 @@
+#pragma once
+// Hector scan-to-map matching: S. Kohlbrecher, O. von Stryk, J. Meyer, U. Klingauf, "A flexible
+// and scalable SLAM system with full 3D motion estimation", SSRR 2011, Sec. IV-B and IV-C.
+//
+// The pose xi = (p_x, p_y, psi) (T_map_robot) maps the robot-frame end points s_i to
+//   S_i(xi) = R(psi) s_i + (p_x, p_y)                                                     Eq. (7)
+// and the matcher minimises sum_i (1 - M(S_i(xi)))^2 (Eq. 8) over the bilinearly interpolated
+// occupancy probability M (grid/bilinear.hpp). The Gauss-Newton step is
+//   dxi = H^-1 sum_i [grad M(S_i) dS_i/dxi]^T (1 - M(S_i)),                                Eq. (12)-(13)
+//   H = sum_i [grad M(S_i) dS_i/dxi]^T [grad M(S_i) dS_i/dxi],
+//   dS_i/dxi = [1 0 -sin(psi) s_x - cos(psi) s_y; 0 1 cos(psi) s_x - sin(psi) s_y],       Eq. (14)
+// accumulated and solved with optim/normal_equations.hpp. On a map pyramid the coarsest level is
+// matched first and each level's result starts the next (Sec. IV-C).
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/grid/map_pyramid.hpp"
+#include "slam2d/grid/occupancy_grid.hpp"
+#include "slam2d/optim/normal_equations.hpp"
+#include "slam2d/optim/robust_kernel.hpp"
+
+namespace slam2d {
+
+struct HectorMatcherConfig {
+  int coarse_iterations = 3;         // Gauss-Newton steps on every level but the finest, >= 1 (Hector: 3)
+  int fine_iterations = 5;           // Gauss-Newton steps on the finest level, >= 1 (Hector: 5)
+  double max_rotation_step = 0.2;    // rad, clamp on |d psi| per step (Hector: 0.2)
+  double max_translation_step = 1.0; // cells of the level, clamp on |d p| per step (the bilinear gradient
+                                     // only reaches about a cell from a wall: longer steps are extrapolation;
+                                     // the clamp stops slides along degenerate corridors)
+  double convergence_step = 1e-5;    // m and rad: a level stops when the step is smaller
+  int max_step_halvings = 2;         // a step that raises the cost is halved up to this often, else dropped
+  RobustKernel kernel{};             // on r = 1 - M; kNone is the paper's plain least squares
+  // Multi-start on the coarsest level (an addition to the paper, for low-rate logs without
+  // odometry): the guess rotated by k * rotation_search_step for |k step| <= rotation_search_range
+  // is matched there and the lowest-cost result goes on to the finer levels. 0 disables it.
+  double rotation_search_range = 0.2;  // rad, >= 0
+  double rotation_search_step = 0.1;   // rad, > 0
+  double rotation_search_margin = 0.0; // 1, in [0, 1): relative cost drop a rotated start needs to win
+};
+
+struct HectorMatchResult {
+  SE2 T_map_robot;                // the estimate
+  Covariance3 covariance = Covariance3::Zero();  // m^2, m rad, rad^2: s^2 H^-1 on the finest level
+  NormalEquations<3> equations;   // the last linearisation on the finest level (H, b, cost)
+  bool converged = false;         // the finest level's last step was below convergence_step
+  bool degenerate = false;        // H singular on the finest level: the pose was not (fully) improved
+  int iterations = 0;             // Gauss-Newton steps over all levels
+  std::size_t points = 0;         // end points used
+  double mean_squared_residual = 0.0;  // 1, mean of (1 - M)^2 on the finest level
+};
+
+/// An optional Gaussian prior on the pose (not in the paper): adds the residual xi - mean with
+/// weight `information` (1/m^2, 1/rad^2) to the normal equations, so that directions the scan
+/// leaves undetermined (a corridor's axis) follow the motion prediction instead of staying put.
+struct PosePrior {
+  SE2 mean;
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+};
+
+/// Adds the prior's residual at pose xi to the equations.
+void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior);
+
+/// Throws Error for iteration counts < 1 or a non-positive, non-finite step clamp.
+void validate(const HectorMatcherConfig& config);
+
+/// The normal equations of Eq. (12)-(13) at pose `T_map_robot` for one grid: residual
+/// r_i = 1 - M(S_i), Jacobian dr_i/dxi = -grad M(S_i) dS_i/dxi, weights from the kernel.
+NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                    const SE2& T_map_robot, const RobustKernel& kernel = {});
+
+/// `iterations` Gauss-Newton steps on one grid from `T_map_robot_guess`.
+HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                     const SE2& T_map_robot_guess, int iterations,
+                                     const HectorMatcherConfig& config = {}, const std::optional<PosePrior>& prior = {});
+
+/// Coarse to fine over the pyramid's levels (coarse_iterations steps each, fine_iterations on
+/// level 0); the covariance is that of level 0. An empty point set returns the guess, degenerate.
+HectorMatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
+                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config = {},
+                                        const std::optional<PosePrior>& prior = {});
+
+}  // namespace slam2d

@@ -1,0 +1,86 @@
+// Hector SLAM (Kohlbrecher et al. 2011) on the raw logs of Kuemmerle et al. 2009: the relation
+// error of the library's default configuration, with and without odometry, against the
+// 'scan matching' column of that paper (Intel 0.220 m, ACES 0.173 m, FR079 0.258 m). The bounds
+// sit a little above what was measured (docs/methods/hector.md has the table); one default
+// configuration for every log.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "slam2d/eval/relation_error.hpp"
+#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/relations.hpp"
+#include "slam2d/slam/hector/hector_slam.hpp"
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+struct HectorLog {
+  const char* name;
+  const char* log;
+  const char* relations;
+  double max_trans_mean_odometry;     // m
+  double max_trans_mean_no_odometry;  // m
+  double max_rot_mean_deg;            // deg, both modes
+};
+
+void PrintTo(const HectorLog& log, std::ostream* os) { *os << log.name; }
+
+RelationErrorResult run_hector(const std::vector<LaserMessage>& scans, const std::vector<Relation>& relations,
+                               bool odometry) {
+  HectorSlamConfig config;
+  config.prior = odometry ? MotionPrior::kOdometry : MotionPrior::kLastPose;
+  HectorSlam slam(config);
+  for (const LaserMessage& laser : scans) {
+    HectorInputs inputs;
+    if (odometry) inputs.T_odom_robot = laser.odom_pose;
+    slam.add_scan(laser.scan, inputs);
+  }
+  EXPECT_EQ(slam.trajectory().size(), scans.size());
+  return relation_error(slam.trajectory(), relations);
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values.empty() ? 0.0 : values[values.size() / 2];
+}
+
+class HectorRealData : public ::testing::TestWithParam<HectorLog> {};
+
+TEST_P(HectorRealData, RelationErrorBeatsScanMatchingOfKuemmerle2009) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
+  const HectorLog& log = GetParam();
+  std::vector<LaserMessage> scans;
+  CarmenReader reader((data / log.log).string());
+  while (auto message = reader.next()) {
+    if (auto* laser = std::get_if<LaserMessage>(&*message)) scans.push_back(std::move(*laser));
+  }
+  const std::vector<Relation> relations = read_relations((data / log.relations).string());
+  for (const bool odometry : {true, false}) {
+    const RelationErrorResult result = run_hector(scans, relations, odometry);
+    EXPECT_EQ(result.missing, 0u);
+    std::vector<double> translations;
+    for (const RelationError& e : result.errors) translations.push_back(e.translation);
+    const double bound = odometry ? log.max_trans_mean_odometry : log.max_trans_mean_no_odometry;
+    EXPECT_LT(result.translation.mean, bound) << log.name << (odometry ? " with" : " without") << " odometry";
+    EXPECT_LT(median(translations), 0.05) << log.name << (odometry ? " with" : " without") << " odometry";
+    EXPECT_LT(result.rotation_deg.mean, log.max_rot_mean_deg);
+  }
+}
+
+// Measured (m, mean translational relation error, with / without odometry): Intel 0.020 / 0.020,
+// ACES 0.095 / 0.166, FR079 0.035 / 0.035. ACES without odometry only just beats the 2009 figure:
+// the robot turns 1.4 rad during a 3 s gap in the log, which only the recovery search catches.
+INSTANTIATE_TEST_SUITE_P(Kuemmerle2009, HectorRealData,
+                         ::testing::Values(HectorLog{"intel", "intel/intel.clf.gz", "intel/intel.relations", 0.04, 0.04, 0.4},
+                                           HectorLog{"aces", "aces/aces.clf.gz", "aces/aces.relations", 0.12, 0.19, 0.6},
+                                           HectorLog{"fr079", "fr079/fr079.clf.gz", "fr079/fr079.relations", 0.05, 0.05, 0.6}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace slam2d
