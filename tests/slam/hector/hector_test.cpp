@@ -67,7 +67,17 @@ TEST(HectorMatcher, EmptyScanReturnsTheGuessAsDegenerate) {
   const HectorMatchResult result = match_scan_to_pyramid(map, {}, SE2(1, 2, 0.3));
   EXPECT_TRUE(result.degenerate);
   EXPECT_EQ(result.T_map_robot, SE2(1, 2, 0.3));
+  // Nothing was measured: the covariance must say so, never claim certainty.
+  EXPECT_GE(result.covariance.diagonal().minCoeff(), 1e6);
   EXPECT_THROW(match_scan_to_pyramid(map, {}, SE2(), {.fine_iterations = 0}), Error);
+}
+
+TEST(HectorMatcher, ScanAgainstAnEmptyMapHasAnUnconstrainedCovariance) {
+  const MapPyramid map;  // every cell unknown: no gradient, a singular Hessian
+  const std::vector<Eigen::Vector2d> points{{1.0, 0.0}, {0.0, 1.0}, {2.0, 2.0}, {3.0, -1.0}, {-1.0, 2.0}};
+  const HectorMatchResult result = match_scan_to_pyramid(map, points, SE2(0.5, -0.5, 0.1));
+  EXPECT_TRUE(result.degenerate);
+  EXPECT_GE(result.covariance.diagonal().minCoeff(), 1e6);
 }
 
 TEST(HectorMatcher, LinearizationMatchesFiniteDifferencesOfTheCost) {
