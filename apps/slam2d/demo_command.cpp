@@ -31,7 +31,11 @@ void run_demo(const DemoOptions& options) {
   const SimulatedRun run = simulate(options.config);
   write_run(run, log, truth_path);
 
-  const MapJobResult mapped = run_map_job({.log = log, .out_dir = options.out, .method = "odometry", .quiet = options.quiet});
+  MapJobOptions map_options;
+  map_options.log = log;
+  map_options.out_dir = options.out;
+  map_options.quiet = options.quiet;
+  const MapJobResult mapped = run_map_job(map_options);
   JsonObject accuracy;
   const ReferenceError error = add_reference_error(accuracy, mapped.trajectory, run.truth, 0.001, 1.0);
   JsonObject json;

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "commands.hpp"
 #include "json.hpp"
 #include "progress.hpp"
 #include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
@@ -21,6 +23,7 @@ namespace {
 
 struct InfoOptions {
   std::string path;
+  std::optional<double> range_max;  // m, overrides the FLASER no-return threshold
   bool json = false;
   bool quiet = false;
 };
@@ -30,7 +33,10 @@ bool ends_with_any(const std::string& path, std::initializer_list<const char*> s
 }
 
 JsonObject log_info(const InfoOptions& options) {
-  CarmenReader reader(options.path);
+  check(!options.range_max || *options.range_max > 0.0, "info: --range-max must be positive");
+  CarmenReaderOptions reader_options;
+  reader_options.range_max = options.range_max;
+  CarmenReader reader(options.path, reader_options);
   Progress progress("info", options.quiet);
   std::map<std::size_t, std::size_t> beam_counts;  // beams -> scans
   std::map<std::string, std::size_t> laser_types;
@@ -120,6 +126,8 @@ void add_info_command(CLI::App& app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* command = app.add_subcommand("info", "Summarise a CARMEN log, a map (.yaml) or a pose graph (.g2o, .graph)");
   command->add_option("file", options->path, "CARMEN log (plain or .gz), map YAML, or g2o/TORO graph")->required();
+  command->add_option("--range-max", options->range_max,
+                      "m: FLASER readings at or above are no-return (default: the log's PARAM, else 80)");
   command->add_flag("--json", options->json, "Print a JSON summary");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_info(*options); });

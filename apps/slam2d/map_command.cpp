@@ -18,6 +18,8 @@ void add_map_command(CLI::App& app) {
       ->check(CLI::IsMember(map_methods()))
       ->capture_default_str();
   command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
+  command->add_option("--range-max", options->range_max,
+                      "m: FLASER readings at or above are no-return (default: the log's PARAM, else 80)");
   command->add_flag("--no-odometry", options->no_odometry, "hector: ignore the log's odometry (initial guess: the last pose)");
   command->add_option("--levels", options->levels, "hector: map pyramid levels")
       ->check(CLI::Range(1, 16))

@@ -32,7 +32,9 @@ struct MappingRun {
 // with the progress line; fills every field of the run but the map.
 template <typename AddScan>
 MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
-  CarmenReader reader(options.log);
+  CarmenReaderOptions reader_options;
+  reader_options.range_max = options.range_max;
+  CarmenReader reader(options.log, reader_options);
   Progress progress("map", options.quiet);
   MappingRun run;
   while (auto message = reader.next()) {
@@ -112,6 +114,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
         "map: unknown method '" + options.method + "' (known: odometry, hector)");
   check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
   check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
+  check(!options.range_max || *options.range_max > 0.0, "map: --range-max must be positive");
   const RunClock clock;
   MappingRun run = options.method == "hector" ? map_with_hector(options) : map_with_odometry(options);
   const double cpu = clock.cpu_seconds();

@@ -2,6 +2,7 @@
 // The mapping job behind `slam2d map` (and `slam2d demo`): read a log, estimate the trajectory
 // with the chosen method, build the occupancy grid, write the outputs.
 
+#include <optional>
 #include <string>
 
 #include "json.hpp"
@@ -18,6 +19,7 @@ struct MapJobOptions {
   bool no_odometry = false;         // hector: ignore the log's odometry (the last pose is the initial guess)
   int levels = 3;                   // hector: map pyramid levels, in [1, 16]
   bool quiet = false;               // no progress line
+  std::optional<double> range_max;  // m; FLASER/RLASER readings at or above are no-return (default: PARAM, else 80)
 };
 
 struct MapJobResult {

@@ -63,6 +63,25 @@ TEST_F(CliTest, InfoReportsTheSimulatedLog) {
   for (const char* key : {"max_range", "skipped_lines"}) EXPECT_TRUE(json_number(result.output, key)) << key;
 }
 
+TEST_F(CliTest, RangeMaxOverridesTheNoReturnThreshold) {
+  // The simulator declares its 30 m maximum in a PARAM line; --range-max overrides it.
+  const CommandResult declared = run_command(slam2d("info --json " + log()));
+  ASSERT_EQ(declared.exit_code, 0) << declared.errors;
+  EXPECT_EQ(json_number(declared.output, "range_max"), 30.0);
+  const CommandResult overridden = run_command(slam2d("info --json --range-max 4.5 " + log()));
+  ASSERT_EQ(overridden.exit_code, 0) << overridden.errors;
+  EXPECT_EQ(json_number(overridden.output, "range_max"), 4.5);
+  // Fewer returns mark fewer walls.
+  TempDir full, short_range;
+  ASSERT_EQ(run_command(slam2d("map --quiet --out " + full.path().string() + " " + log())).exit_code, 0);
+  ASSERT_EQ(run_command(slam2d("map --quiet --range-max 2 --out " + short_range.path().string() + " " + log())).exit_code, 0);
+  const auto occupied = [](const TempDir& dir) {
+    return json_number(run_command(slam2d("info --json " + dir.file("map.yaml"))).output, "occupied_cells").value_or(0);
+  };
+  EXPECT_LT(occupied(short_range), 0.8 * occupied(full));
+  EXPECT_NE(run_command(slam2d("map --quiet --range-max -1 --out " + full.file("x") + " " + log())).exit_code, 0);
+}
+
 TEST_F(CliTest, MapWritesEveryOutputWithOneTrajectoryLinePerScan) {
   TempDir out;
   const CommandResult result = run_command(slam2d("map --quiet --json --method odometry --resolution 0.1 --out " +
