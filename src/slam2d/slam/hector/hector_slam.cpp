@@ -27,6 +27,13 @@ LaserScan levelled_scan(const LaserScan& scan, const Attitude& attitude) {
   return levelled;
 }
 
+// The pyramid's settings with the usable range of the whole system.
+MapPyramidConfig map_config(const HectorSlamConfig& config) {
+  MapPyramidConfig map = config.map;
+  map.grid.max_range = config.max_range;
+  return map;
+}
+
 }  // namespace
 
 void validate(const HectorSlamConfig& config) {
@@ -47,7 +54,7 @@ void validate(const HectorSlamConfig& config) {
   validate(config.matcher);
 }
 
-HectorSlam::HectorSlam(const HectorSlamConfig& config) : config_(config), map_(config.map) {
+HectorSlam::HectorSlam(const HectorSlamConfig& config) : config_(config), map_(map_config(config)) {
   validate(config_);
   if (config_.prior != MotionPrior::kOdometry) {
     config_.matcher.rotation_search_range = config_.rotation_search_without_odometry;

@@ -27,12 +27,12 @@ enum class MotionPrior {
 };
 
 struct HectorSlamConfig {
-  // The map pyramid: 3 levels from 5 cm; Hector's update factors p_hit 0.9 / p_miss 0.4. Readings at
-  // or beyond max_range are no-return beams; they clear nothing (max_clear_range 0), as in Hector.
+  // The map pyramid: 3 levels from 5 cm; Hector's update factors p_hit 0.9 / p_miss 0.4. No-return
+  // beams clear nothing (max_clear_range 0), as in Hector. Its grid.max_range is ignored: the map
+  // takes max_range below, so matching and mapping use one usable range.
   MapPyramidConfig map{.levels = 3,
                        .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4,
-                                .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0,
-                                .max_range = 25.0}};
+                                .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0}};
   HectorMatcherConfig matcher{};
   double min_range = 0.1;          // m, shorter readings are dropped (robot body, dust)
   double max_range = 25.0;         // m, usable range for matching and mapping; longer readings are no-return
