@@ -11,5 +11,7 @@ void add_simulate_command(CLI::App& app);
 void add_map_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+void add_odometry_command(CLI::App& app);
+void add_match_bench_command(CLI::App& app);
 
 }  // namespace slam2d::cli

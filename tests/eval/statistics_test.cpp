@@ -1,6 +1,7 @@
 // Tests of the error statistics shared by the evaluation metrics.
 
 #include "slam2d/eval/statistics.hpp"
+#include "slam2d/core/error.hpp"
 
 #include <gtest/gtest.h>
 
@@ -39,6 +40,17 @@ TEST(Statistics, SquaredIsElementwise) {
   ASSERT_EQ(s.size(), 2u);
   EXPECT_EQ(s[0], 4.0);
   EXPECT_EQ(s[1], 0.25);
+}
+
+TEST(Statistics, PercentileInterpolatesBetweenOrderStatistics) {
+  const std::vector<double> values{4.0, 1.0, 3.0, 2.0, 5.0};  // sorted: 1 2 3 4 5
+  EXPECT_DOUBLE_EQ(percentile(values, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(percentile(values, 50.0), 3.0);
+  EXPECT_DOUBLE_EQ(percentile(values, 75.0), 4.0);
+  EXPECT_DOUBLE_EQ(percentile(values, 95.0), 4.8);  // rank 3.8
+  EXPECT_DOUBLE_EQ(percentile(values, 100.0), 5.0);
+  EXPECT_DOUBLE_EQ(percentile({}, 50.0), 0.0);
+  EXPECT_THROW(percentile(values, 101.0), Error);
 }
 
 }  // namespace

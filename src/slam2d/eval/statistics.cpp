@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "slam2d/core/error.hpp"
+
 namespace slam2d {
 
 ErrorStatistics compute_statistics(std::span<const double> values) {
@@ -34,6 +36,16 @@ double median(std::vector<double> values) {
   if (values.size() % 2 == 1) return upper;
   const double lower = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle));
   return 0.5 * (lower + upper);
+}
+
+double percentile(std::vector<double> values, double p) {
+  check(p >= 0.0 && p <= 100.0, "percentile: p must be in [0, 100]");
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double rank = p / 100.0 * static_cast<double>(values.size() - 1);
+  const auto lower = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t upper = std::min(lower + 1, values.size() - 1);
+  return values[lower] + (rank - static_cast<double>(lower)) * (values[upper] - values[lower]);
 }
 
 std::vector<double> squared(std::span<const double> values) {

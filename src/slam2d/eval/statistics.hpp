@@ -25,6 +25,10 @@ double root_mean_square(std::span<const double> values);
 /// The median (mean of the two middle values for an even count); zero when empty.
 double median(std::vector<double> values);
 
+/// The p-th percentile, p in [0, 100], interpolating linearly between the order statistics
+/// (numpy's default: rank p / 100 * (n - 1)); zero when empty. Throws Error for p outside [0, 100].
+double percentile(std::vector<double> values, double p);
+
 /// The squares of `values`, element by element.
 std::vector<double> squared(std::span<const double> values);
 

@@ -1,0 +1,113 @@
+// slam2d odometry LOG --matcher NAME --out TRAJ: scan-to-scan odometry over a whole log with any
+// matcher (registration/scan_odometry.hpp), one trajectory line per front-laser scan.
+
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <variant>
+
+#include "commands.hpp"
+#include "json.hpp"
+#include "progress.hpp"
+#include "run_stats.hpp"
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/config_file.hpp"
+#include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/registration/matcher_registry.hpp"
+#include "slam2d/registration/scan_odometry.hpp"
+
+namespace slam2d::cli {
+namespace {
+
+struct OdometryOptions {
+  std::string log;
+  std::string matcher = "pl-icp";
+  std::string config;  // a preset .yaml for the matcher
+  std::string out;
+  std::optional<double> keyframe;            // m; 0: match every scan against the previous one
+  std::optional<double> keyframe_angle_deg;  // deg
+  std::optional<double> range_max;           // m
+  bool no_odometry = false;
+  bool json = false;
+  bool quiet = false;
+};
+
+Matcher configured_matcher(const OdometryOptions& options) {
+  if (options.config.empty()) return make_matcher(options.matcher);
+  const ConfigNode config = ConfigNode::load(options.config);
+  return make_matcher(options.matcher, config);
+}
+
+ScanOdometryConfig odometry_config(const OdometryOptions& options) {
+  ScanOdometryConfig config;
+  if (options.keyframe) {
+    config.keyframe_distance = *options.keyframe;
+    if (*options.keyframe == 0.0) config.keyframe_angle = 0.0;
+  }
+  if (options.keyframe_angle_deg) config.keyframe_angle = deg_to_rad(*options.keyframe_angle_deg);
+  if (options.range_max) config.max_range = *options.range_max;
+  validate(config);
+  return config;
+}
+
+void run_odometry(const OdometryOptions& options) {
+  ScanOdometry odometry(configured_matcher(options), odometry_config(options));
+  const RunClock clock;
+  CarmenReader reader(options.log);
+  Progress progress("odometry", options.quiet);
+  while (auto message = reader.next()) {
+    const auto* laser = std::get_if<LaserMessage>(&*message);
+    if (laser == nullptr || laser->type == "RLASER") continue;
+    const bool use_odometry = laser->has_poses && !options.no_odometry;
+    odometry.add(laser->scan, use_odometry ? std::optional<SE2>(laser->odom_pose) : std::nullopt);
+    if (odometry.stats().scans % 256 == 0) {
+      progress.update(reader.progress(), fmt::format("{} scans, {} failures", odometry.stats().scans, odometry.stats().failures));
+    }
+  }
+  progress.finish();
+  const double cpu = clock.cpu_seconds();
+  const Trajectory& trajectory = odometry.trajectory();
+  check(!trajectory.empty(), reader.path() + ": no front-laser scans in the log");
+  const std::filesystem::path out(options.out);
+  if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
+  write_trajectory(options.out, trajectory);
+
+  const ScanOdometryStats& stats = odometry.stats();
+  const double matches = static_cast<double>(std::max<std::size_t>(stats.matches, 1));
+  const double duration = trajectory.back().stamp - trajectory.front().stamp;
+  JsonObject summary;
+  summary.add("matcher", options.config.empty() ? options.matcher : options.matcher + " (" + options.config + ")");
+  summary.add("log", options.log).add("scans", stats.scans).add("matches", stats.matches).add("keyframes", stats.keyframes);
+  summary.add("cpu_s", cpu).add("us_per_match", 1e6 * stats.matcher_seconds / matches);
+  summary.add("mean_iterations", static_cast<double>(stats.total_iterations) / matches).add("failures", stats.failures);
+  summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
+  summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
+  std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
+}
+
+}  // namespace
+
+void add_odometry_command(CLI::App& app) {
+  auto options = std::make_shared<OdometryOptions>();
+  CLI::App* command = app.add_subcommand("odometry", "Scan-to-scan odometry over a log with a scan matcher");
+  command->add_option("log", options->log, "CARMEN log (plain or .gz)")->required();
+  command->add_option("--matcher", options->matcher, "Matcher name")
+      ->check(CLI::IsMember(matcher_names()))
+      ->capture_default_str();
+  command->add_option("--config", options->config, "Matcher preset (.yaml, e.g. configs/pl-icp.yaml)");
+  command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
+  command->add_option("--keyframe", options->keyframe,
+                      "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
+  command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");
+  command->add_option("--range-max", options->range_max, "m, readings at or beyond are dropped (default 30)");
+  command->add_flag("--no-odometry", options->no_odometry, "Ignore the log's odometry (guess: constant velocity)");
+  command->add_flag("--json", options->json, "Print the summary as JSON");
+  command->add_flag("--quiet", options->quiet, "No progress line");
+  command->callback([options] { run_odometry(*options); });
+}
+
+}  // namespace slam2d::cli

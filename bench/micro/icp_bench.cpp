@@ -1,0 +1,116 @@
+// Micro benchmarks of the ICP family on real data: point-to-point ICP and its accelerated form
+// (Besl & McKay 1992, registration/icp.*), trimmed ICP (Chetverikov 2002, trimmed_icp.*),
+// point-to-plane (Low 2004, point_to_plane.*) and PL-ICP (Censi 2008, pl_icp.*, with its
+// projective search and with the kd-tree), each on consecutive 180-beam Intel scans, single
+// thread, the guess from odometry in the sensor frames:
+//   T_guess = (odom_i T_robot_sensor)^-1 (odom_{i+1} T_robot_sensor).
+// Each benchmark iteration is one match (the pairs cycle through the first scans of the log),
+// so the time column is the time per match; `us_per_match` says the same as a counter, and
+// `iterations` / `converged` are the means over the matches run. Issue 3's target: PL-ICP under
+// 50 us per match.
+//
+//   build/<dir>/bin/slam2d_bench --benchmark_filter='Icp|PlIcp|PointToPlane'
+
+#include <benchmark/benchmark.h>
+
+#include <cstddef>
+#include <functional>
+#include <vector>
+
+#include "bench_data.hpp"
+#include "slam2d/registration/icp.hpp"
+#include "slam2d/registration/pl_icp.hpp"
+#include "slam2d/registration/point_to_plane.hpp"
+#include "slam2d/registration/trimmed_icp.hpp"
+
+namespace {
+
+using namespace slam2d;
+
+constexpr std::size_t kScans = 1001;  // consecutive pairs cycled through: the first 1000 of Intel
+
+/// Consecutive Intel scans as sensor-frame clouds, with the odometry guess of each pair.
+struct IntelPairs {
+  std::vector<PointCloud2> clouds;
+  std::vector<SE2> guesses;  // guesses[i]: T_sensor_i_sensor_{i+1}
+};
+
+const IntelPairs& intel_pairs() {
+  static const IntelPairs pairs = [] {
+    IntelPairs out;
+    const auto& scans = bench::logged_scans("intel", kScans);
+    for (const auto& s : scans) out.clouds.push_back(bench::sensor_cloud(s.scan));
+    for (std::size_t i = 0; i + 1 < scans.size(); ++i) {
+      const SE2 T_odom_sensor_i = scans[i].odom_pose * scans[i].scan.T_robot_sensor;
+      const SE2 T_odom_sensor_j = scans[i + 1].odom_pose * scans[i + 1].scan.T_robot_sensor;
+      out.guesses.push_back(T_odom_sensor_i.inverse() * T_odom_sensor_j);
+    }
+    return out;
+  }();
+  return pairs;
+}
+
+using BoundMatcher = std::function<MatchResult(const PointCloud2&, const PointCloud2&, const SE2&)>;
+
+/// Matches pair after pair (target i, source i + 1) while the state runs.
+void run_intel(benchmark::State& state, const BoundMatcher& match) {
+  const IntelPairs& pairs = intel_pairs();
+  if (pairs.guesses.empty()) {
+    state.SkipWithError("Intel data not found (set SLAM2D_DATA)");
+    return;
+  }
+  std::size_t i = 0;
+  double matches = 0.0;
+  double iterations = 0.0;
+  double converged = 0.0;
+  for (auto _ : state) {
+    const MatchResult result = match(pairs.clouds[i], pairs.clouds[i + 1], pairs.guesses[i]);
+    benchmark::DoNotOptimize(result);
+    matches += 1.0;
+    iterations += result.iterations;
+    converged += result.converged ? 1.0 : 0.0;
+    i = (i + 1) % pairs.guesses.size();
+  }
+  // kIsRate | kInvert: CPU seconds per unit of the value; 1e-6 per match makes it microseconds.
+  state.counters["us_per_match"] =
+      benchmark::Counter(matches * 1e-6, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["iterations"] = iterations / matches;
+  state.counters["converged"] = converged / matches;
+}
+
+void BM_IcpIntel(benchmark::State& state) {
+  run_intel(state, [](const PointCloud2& t, const PointCloud2& s, const SE2& g) { return match_icp(t, s, g); });
+}
+BENCHMARK(BM_IcpIntel)->Unit(benchmark::kMicrosecond);
+
+void BM_IcpAcceleratedIntel(benchmark::State& state) {
+  run_intel(state, [](const PointCloud2& t, const PointCloud2& s, const SE2& g) {
+    return match_icp(t, s, g, {.accelerated = true});
+  });
+}
+BENCHMARK(BM_IcpAcceleratedIntel)->Unit(benchmark::kMicrosecond);
+
+void BM_TrimmedIcpIntel(benchmark::State& state) {
+  run_intel(state, [](const PointCloud2& t, const PointCloud2& s, const SE2& g) { return match_trimmed_icp(t, s, g); });
+}
+BENCHMARK(BM_TrimmedIcpIntel)->Unit(benchmark::kMicrosecond);
+
+void BM_PointToPlaneIntel(benchmark::State& state) {
+  run_intel(state,
+            [](const PointCloud2& t, const PointCloud2& s, const SE2& g) { return match_point_to_plane(t, s, g); });
+}
+BENCHMARK(BM_PointToPlaneIntel)->Unit(benchmark::kMicrosecond);
+
+void BM_PlIcpIntel(benchmark::State& state) {
+  const PlIcpConfig config{.search = static_cast<PlIcpSearch>(state.range(0))};
+  run_intel(state, [&config](const PointCloud2& t, const PointCloud2& s, const SE2& g) {
+    return match_pl_icp(t, s, g, config);
+  });
+}
+BENCHMARK(BM_PlIcpIntel)
+    ->ArgName("search")
+    ->Arg(static_cast<int>(PlIcpSearch::kProjective))
+    ->Arg(static_cast<int>(PlIcpSearch::kKdTree))
+    ->Unit(benchmark::kMicrosecond);
+
+}  // namespace

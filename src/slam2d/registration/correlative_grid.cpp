@@ -1,0 +1,192 @@
+#include "slam2d/registration/correlative_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/normals.hpp"
+
+namespace slam2d {
+
+struct CorrelativeGrid::Target {
+  PointCloud2 cloud;
+  std::unique_ptr<KdTree2> tree;  // over cloud.points (this block never moves)
+};
+
+namespace {
+
+constexpr double kMaxStoredCells = static_cast<double>(1LL << 28);
+
+/// The kernel of Eq. (1) on a squared distance (m^2): the integer score of a cell centre.
+class Kernel {
+ public:
+  explicit Kernel(double max_distance) : max_squared_(max_distance * max_distance) {}
+  double max_squared() const { return max_squared_; }
+  std::uint8_t operator()(double squared_distance) const {
+    if (!(squared_distance < max_squared_)) return 0;
+    return static_cast<std::uint8_t>(std::lround(kMaxCellScore * (1.0 - squared_distance / max_squared_)));
+  }
+
+ private:
+  double max_squared_;
+};
+
+double squared_distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (a + t * ab - p).squaredNorm();
+}
+
+const PointCloud2& empty_cloud() {
+  static const PointCloud2 cloud;
+  return cloud;
+}
+
+void check_cloud(const PointCloud2& cloud) {
+  check(cloud.normals.empty() || cloud.normals.size() == cloud.points.size(),
+        "CorrelativeGrid: the target cloud has normals, but not one per point");
+  for (const Point2& p : cloud.points) check(p.allFinite(), "CorrelativeGrid: the target cloud has a non-finite point");
+}
+
+}  // namespace
+
+void validate(const CorrelativeGridConfig& config) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  check(positive(config.resolution), "CorrelativeGridConfig: resolution must be finite and positive (m)");
+  check(positive(config.sigma), "CorrelativeGridConfig: sigma must be finite and positive (m)");
+  check(positive(config.truncation), "CorrelativeGridConfig: truncation must be finite and positive (sigmas)");
+  check(std::isfinite(config.max_segment_length) && config.max_segment_length >= 0.0,
+        "CorrelativeGridConfig: max_segment_length must be finite and >= 0 (m)");
+  check(config.levels >= 1 && config.levels <= 16,
+        "CorrelativeGridConfig: levels must lie in [1, 16], got " + std::to_string(config.levels));
+  check(config.truncation * config.sigma / config.resolution <= 1e4,
+        "CorrelativeGridConfig: the kernel radius truncation * sigma spans more than 10^4 cells");
+}
+
+CorrelativeGrid::CorrelativeGrid(const PointCloud2& target, const CorrelativeGridConfig& config) : config_(config) {
+  validate(config_);
+  check_cloud(target);
+  geometry_.resolution = config_.resolution;
+  auto shared = std::make_shared<Target>();
+  shared->cloud = target;
+  shared->tree = std::make_unique<KdTree2>(shared->cloud.points);
+  if (!target.empty() && !target.has_normals()) estimate_normals(shared->cloud, *shared->tree);
+  target_ = std::move(shared);
+  if (target.empty()) return;
+  rasterize(target);
+  pool_levels();
+}
+
+/// Level 0 (Eq. (1)): the geometry, then each point's (and segment's) kernel, max-combined.
+void CorrelativeGrid::rasterize(const PointCloud2& cloud) {
+  const double resolution = config_.resolution;
+  const int radius = static_cast<int>(std::ceil(max_distance() / resolution));  // kernel cells
+  Eigen::Vector2d low = cloud.points.front();
+  Eigen::Vector2d high = low;
+  for (const Point2& p : cloud.points) {
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  }
+  const int margin = radius + 1;  // the kernel, then a ring of zero cells
+  const Eigen::Vector2d extent = (high - low) / resolution;
+  padding_ = (1 << (config_.levels - 1)) - 1;
+  const double stored = (extent.x() + 2.0 * (margin + padding_) + 3.0) * (extent.y() + 2.0 * (margin + padding_) + 3.0);
+  check(stored <= kMaxStoredCells, "CorrelativeGrid: the table would exceed 2^28 cells per level (target extent " +
+                                       std::to_string(high.x() - low.x()) + " x " + std::to_string(high.y() - low.y()) +
+                                       " m at " + std::to_string(resolution) + " m per cell)");
+  // Half a cell more, so that rounding never puts the lowest point in a cell below `margin`.
+  geometry_.origin = low - Eigen::Vector2d::Constant((margin + 0.5) * resolution);
+  const CellIndex top = geometry_.cell_of(high);
+  width_ = top.x + margin + 1;
+  height_ = top.y + margin + 1;
+  stride_ = width_ + 2 * padding_;
+  stored_rows_ = height_ + 2 * padding_;
+  std::vector<std::uint8_t>& cells = levels_.emplace_back(static_cast<std::size_t>(stride_) * stored_rows_, 0);
+
+  const Kernel kernel(max_distance());
+  auto splat = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {  // segment a-b (a point when a == b)
+    const CellIndex c0 = geometry_.cell_of(a.cwiseMin(b));
+    const CellIndex c1 = geometry_.cell_of(a.cwiseMax(b));
+    for (int y = c0.y - radius; y <= c1.y + radius; ++y) {
+      for (int x = c0.x - radius; x <= c1.x + radius; ++x) {
+        const Eigen::Vector2d centre = geometry_.cell_center({x, y});
+        const double d2 = a == b ? (centre - a).squaredNorm() : squared_distance_to_segment(centre, a, b);
+        std::uint8_t& cell = cells[static_cast<std::size_t>(stored_index(x, y))];
+        cell = std::max(cell, kernel(d2));
+      }
+    }
+  };
+  const double max_segment2 = config_.max_segment_length * config_.max_segment_length;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    splat(cloud.points[i], cloud.points[i]);
+    if (i + 1 < cloud.size()) {
+      const double gap2 = (cloud.points[i + 1] - cloud.points[i]).squaredNorm();
+      if (gap2 > 0.0 && gap2 <= max_segment2) splat(cloud.points[i], cloud.points[i + 1]);
+    }
+  }
+}
+
+/// Levels 1 .. levels - 1 (Hess Sec. V-B): level k = max of two level-(k - 1) windows 2^(k-1)
+/// apart, along rows then along columns; stored cells beyond the raster count as 0.
+void CorrelativeGrid::pool_levels() {
+  const std::size_t row = static_cast<std::size_t>(stride_);
+  const std::size_t rows = static_cast<std::size_t>(stored_rows_);
+  std::vector<std::uint8_t> along_rows(row * rows);
+  for (int k = 1; k < config_.levels; ++k) {
+    const std::size_t shift = std::size_t{1} << (k - 1);
+    const std::vector<std::uint8_t>& previous = levels_.back();
+    for (std::size_t v = 0; v < rows; ++v) {
+      const std::uint8_t* in = previous.data() + v * row;
+      std::uint8_t* out = along_rows.data() + v * row;
+      const std::size_t inner = row > shift ? row - shift : 0;
+      for (std::size_t u = 0; u < inner; ++u) out[u] = std::max(in[u], in[u + shift]);
+      for (std::size_t u = inner; u < row; ++u) out[u] = in[u];
+    }
+    std::vector<std::uint8_t> next(row * rows);
+    for (std::size_t v = 0; v < rows; ++v) {
+      const std::uint8_t* a = along_rows.data() + v * row;
+      std::uint8_t* out = next.data() + v * row;
+      if (v + shift < rows) {
+        const std::uint8_t* b = a + shift * row;
+        for (std::size_t u = 0; u < row; ++u) out[u] = std::max(a[u], b[u]);
+      } else {
+        std::copy(a, a + row, out);
+      }
+    }
+    levels_.push_back(std::move(next));
+  }
+}
+
+int CorrelativeGrid::score(int level, int x, int y) const {
+  if (empty() || level < 0 || level >= levels()) return 0;
+  x = std::clamp(x, -padding_, width_ + padding_ - 1);
+  y = std::clamp(y, -padding_, height_ + padding_ - 1);
+  return levels_[static_cast<std::size_t>(level)][static_cast<std::size_t>(stored_index(x, y))];
+}
+
+double CorrelativeGrid::log_likelihood(int score) const {
+  return (static_cast<double>(score) / kMaxCellScore - 1.0) * 0.5 * config_.truncation * config_.truncation;
+}
+
+double CorrelativeGrid::distance_of_score(int score) const {
+  const double s = std::clamp(static_cast<double>(score) / kMaxCellScore, 0.0, 1.0);
+  return max_distance() * std::sqrt(1.0 - s);
+}
+
+const PointCloud2& CorrelativeGrid::target() const { return target_ ? target_->cloud : empty_cloud(); }
+
+const KdTree2& CorrelativeGrid::tree() const {
+  static const KdTree2 empty_tree(empty_cloud().points);
+  return target_ ? *target_->tree : empty_tree;
+}
+
+std::size_t CorrelativeGrid::memory_bytes() const {
+  std::size_t bytes = sizeof(*this);
+  for (const auto& level : levels_) bytes += level.capacity();
+  if (target_) bytes += target_->cloud.points.capacity() * sizeof(Point2) * 2;
+  return bytes;
+}
+
+}  // namespace slam2d

@@ -1,0 +1,55 @@
+#pragma once
+// Is the match constrained in every direction? The Fisher information of the pose from
+// point-to-line residuals (A. Censi, "On achievable accuracy for range-finder localization",
+// ICRA 2007): each matched point i, at m_i = T p_i in the target frame with the target's
+// surface normal n_i there, contributes
+//   I += a_i a_i^T / sigma^2,  a_i = ( n_i, n_i^T J (m_i - t) ),  J = [0 -1; 1 0].
+// A corridor gives no information along its axis and a circular room none in rotation. The
+// eigen-decomposition, with rotation scaled to arc length at the points' RMS distance L from
+// the sensor (theta' = L theta, so every axis is in metres), names the weak direction; the
+// match is degenerate when the smallest eigenvalue is below `min_eigenvalue_ratio` times the
+// largest.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/covariance.hpp"
+#include "slam2d/registration/match_result.hpp"
+
+namespace slam2d {
+
+struct DegeneracyConfig {
+  double min_eigenvalue_ratio = 0.01;  // 1, smallest over largest scaled eigenvalue below which the match is degenerate
+  double range_sigma = 0.01;           // m, sensor noise that scales the information
+};
+
+struct DegeneracyAnalysis {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // Fisher information in (x, y, theta): 1/m^2, 1/(m rad), 1/rad^2
+  double length_scale = 1.0;                               // m, L above
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();   // 1/m^2, ascending, of the scaled information
+  Eigen::Matrix3d directions = Eigen::Matrix3d::Identity();  // columns: unit eigenvectors in (x, y, theta), matching eigenvalues
+  bool degenerate = true;
+  Eigen::Vector3d weak_direction = Eigen::Vector3d::Zero();  // (x, y, theta), unit, the first column of directions
+};
+
+/// Normals come from `target.normals` (point-to-line with target2 = kNoPoint, or any
+/// point-to-point pair; estimated with estimate_normals when the target has none) or from the
+/// segment target-target2; pairs without a normal are skipped.
+/// With fewer than 3 usable pairs the match is degenerate.
+DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source,
+                                      const std::vector<Correspondence>& correspondences,
+                                      const DegeneracyConfig& config = {});
+
+/// The decomposition of a given information matrix (x, y, theta) at length scale L.
+DegeneracyAnalysis analyze_information(const Eigen::Matrix3d& information, double length_scale,
+                                       const DegeneracyConfig& config = {});
+
+/// Copies the verdict into a result (degenerate, weak_direction) and, when degenerate, raises the
+/// result's variance along the weak direction w to at least the Cramer-Rao bound 1 / (w^T I w)
+/// and at least the variance along the strongest direction times the eigenvalue ratio (1e6 when
+/// w carries no information).
+void apply(const DegeneracyAnalysis& analysis, MatchResult& result);
+
+}  // namespace slam2d

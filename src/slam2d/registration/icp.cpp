@@ -1,0 +1,170 @@
+// Point-to-point ICP and accelerated ICP: P. J. Besl and N. D. McKay, "A method for
+// registration of 3-D shapes", IEEE PAMI 14(2), 1992 (Sec. III-A closest points, Sec. III-C
+// registration, Sec. IV the algorithm, Sec. IV-E its acceleration). See icp.hpp.
+
+#include "slam2d/registration/icp.hpp"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
+
+namespace slam2d {
+namespace {
+
+constexpr std::size_t kMinPoints = 3;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// Besl & McKay's registration vector q = [q_R | q_T] in the plane: the unit quaternion of a
+// rotation about z, (q0, q3) = (cos(theta/2), sin(theta/2)) (Eq. (21), q1 = q2 = 0), and (t_x, t_y).
+using RegistrationVector = Eigen::Vector4d;
+
+RegistrationVector registration_vector(const SE2& T) {
+  return {std::cos(T.theta() / 2.0), std::sin(T.theta() / 2.0), T.x(), T.y()};
+}
+
+SE2 from_registration_vector(const RegistrationVector& q) {
+  return SE2(q(2), q(3), 2.0 * std::atan2(q(1), q(0)));  // q_R renormalised by the atan2
+}
+
+// Sec. IV-E: after registration k, with Delta q_k = q_k - q_{k-1} and theta_k the angle between
+// Delta q_k and Delta q_{k-1}: if theta_k and theta_{k-1} are below delta_theta, the errors
+// d_k, d_{k-1}, d_{k-2} at arc lengths v = 0, -|Delta q_k|, -|Delta q_k| - |Delta q_{k-1}| are
+// fitted by a line (zero crossing v1) and a parabola (extremum v2), and q_k moves by v along
+// Delta q_k, v capped at v_max = factor |Delta q_k|. After a move the history restarts, since
+// the error at the extrapolated vector is not known.
+class Accelerator {
+ public:
+  explicit Accelerator(const IcpConfig& config)
+      : max_angle_(config.acceleration_angle), max_factor_(config.acceleration_max_factor) {}
+
+  SE2 update(const SE2& T_k, double d_k) {
+    q_ = {registration_vector(T_k), q_[0], q_[1]};
+    d_ = {d_k, d_[0], d_[1]};
+    if (++count_ < 3) return T_k;
+    const RegistrationVector step = q_[0] - q_[1];
+    const RegistrationVector previous_step = q_[1] - q_[2];
+    const double angle = angle_between(step, previous_step);
+    const bool aligned = angle < max_angle_ && previous_angle_ < max_angle_;
+    previous_angle_ = angle;
+    const double v = aligned ? extrapolation(step.norm(), previous_step.norm()) : 0.0;
+    if (!(v > 0.0)) return T_k;
+    count_ = 0;
+    previous_angle_ = kInfinity;
+    return from_registration_vector(q_[0] + v * step.normalized());
+  }
+
+ private:
+  static double angle_between(const RegistrationVector& a, const RegistrationVector& b) {
+    const double norms = a.norm() * b.norm();
+    if (!(norms > 0.0)) return kInfinity;
+    return std::acos(std::clamp(a.dot(b) / norms, -1.0, 1.0));
+  }
+
+  // The step length v along Delta q_k (0: no extrapolation).
+  double extrapolation(double step, double previous_step) const {
+    const std::array<double, 3> v = {0.0, -step, -step - previous_step};
+    // Line d = a1 v + b1 by least squares through the three points; v1 = -b1 / a1.
+    const double v_mean = (v[0] + v[1] + v[2]) / 3.0;
+    const double d_mean = (d_[0] + d_[1] + d_[2]) / 3.0;
+    double covariance = 0.0;
+    double variance = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      covariance += (v[i] - v_mean) * (d_[i] - d_mean);
+      variance += (v[i] - v_mean) * (v[i] - v_mean);
+    }
+    const double a1 = covariance / variance;
+    const double v1 = a1 < 0.0 ? -(d_mean - a1 * v_mean) / a1 : -1.0;
+    // Parabola d = a2 v^2 + b2 v + c2 through the three points (divided differences); v2 = -b2 / (2 a2).
+    const double slope01 = (d_[1] - d_[0]) / (v[1] - v[0]);
+    const double slope12 = (d_[2] - d_[1]) / (v[2] - v[1]);
+    const double a2 = (slope12 - slope01) / (v[2] - v[0]);
+    const double b2 = slope01 - a2 * v[1];
+    const double v2 = a2 > 0.0 ? -b2 / (2.0 * a2) : -1.0;  // a minimum only
+    const double v_max = max_factor_ * step;
+    if (v2 > 0.0 && v2 < v1 && v2 < v_max) return v2;  // 0 < v2 < v1 < v_max or 0 < v2 < v_max < v1
+    if (v1 > 0.0 && v1 < v_max) return v1;
+    if (v1 >= v_max && v2 >= v_max) return v_max;
+    return 0.0;
+  }
+
+  double max_angle_;
+  double max_factor_;
+  std::array<RegistrationVector, 3> q_ = {RegistrationVector::Zero(), RegistrationVector::Zero(),
+                                          RegistrationVector::Zero()};  // q_k, q_{k-1}, q_{k-2}
+  std::array<double, 3> d_ = {0.0, 0.0, 0.0};                           // d_k, d_{k-1}, d_{k-2}
+  int count_ = 0;                          // registrations since the last restart
+  double previous_angle_ = kInfinity;      // theta_{k-1}
+};
+
+// Buffers reused across iterations (no allocation once grown).
+struct IcpBuffers {
+  std::vector<PointPair> pairs;
+  std::vector<Point2> target_points;
+  std::vector<Point2> source_points;
+};
+
+}  // namespace
+
+void validate(const IcpConfig& config) {
+  check(config.max_iterations >= 1, "icp: max_iterations must be >= 1");
+  check(config.max_correspondence_distance > 0.0, "icp: max_correspondence_distance must be > 0");
+  check(config.min_correspondences >= 3, "icp: min_correspondences must be >= 3");
+  check(config.solver == PointToPointSolver::kSvd || config.solver == PointToPointSolver::kQuaternion,
+        "icp: unknown solver");
+  check(config.min_mse_change >= 0.0, "icp: min_mse_change must be >= 0");
+  check(config.min_translation_step >= 0.0, "icp: min_translation_step must be >= 0");
+  check(config.min_rotation_step >= 0.0, "icp: min_rotation_step must be >= 0");
+  check(config.acceleration_angle > 0.0 && config.acceleration_angle < std::numbers::pi,
+        "icp: acceleration_angle must be in (0, pi)");
+  check(config.acceleration_max_factor > 0.0, "icp: acceleration_max_factor must be > 0");
+}
+
+MatchResult match_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
+                      const IcpConfig& config) {
+  validate(config);
+  if (target.size() < kMinPoints || source.size() < kMinPoints) return unmatched(T_target_source_guess);
+  const KdTree2 tree(target.points);
+  const auto min_pairs = static_cast<std::size_t>(config.min_correspondences);
+  IcpBuffers buffers;
+  Accelerator accelerator(config);
+  MatchResult result;
+  SE2 T = T_target_source_guess;
+  double previous_mse = kInfinity;
+  for (int k = 0; k < config.max_iterations; ++k) {
+    // Y_k = C(P_k, X): closest points, far pairs rejected (Sec. III-A).
+    associate_closest(tree, source.points, T, config.max_correspondence_distance, buffers.pairs);
+    if (buffers.pairs.size() < min_pairs) break;
+    // (q_k, d_k) = Q(P_0, Y_k): the original points registered to their closest points (Sec. III-C).
+    gather_pairs(buffers.pairs, target, source, SE2(), buffers.target_points, buffers.source_points);
+    SE2 T_next = solve_point_to_point(config.solver, buffers.target_points, buffers.source_points);
+    const double mse = mean_squared_distance(T_next, buffers.target_points, buffers.source_points);  // Eq. (22)
+    if (config.accelerated) T_next = accelerator.update(T_next, mse);  // Sec. IV-E
+    result.iterations = k + 1;
+    // Stop when d_{k-1} - d_k < tau (Sec. IV), or when the step is negligible.
+    const bool done = std::abs(previous_mse - mse) < config.min_mse_change ||
+                      step_below(T, T_next, config.min_translation_step, config.min_rotation_step);
+    T = T_next;
+    previous_mse = mse;
+    if (done) {
+      result.converged = true;
+      break;
+    }
+  }
+  // The final correspondences at the estimate.
+  result.T_target_source = T;
+  associate_closest(tree, source.points, T, config.max_correspondence_distance, buffers.pairs);
+  if (buffers.pairs.size() < min_pairs) result.converged = false;
+  finish_match(with_normals(target, tree), source, to_correspondences(buffers.pairs), ErrorMetric::kPointToPoint,
+               min_pairs, result);
+  return result;
+}
+
+}  // namespace slam2d

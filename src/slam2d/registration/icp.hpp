@@ -1,0 +1,43 @@
+#pragma once
+// Point-to-point ICP: P. J. Besl and N. D. McKay, "A method for registration of 3-D shapes",
+// IEEE PAMI 14(2), 1992, in the plane. Each iteration pairs every source point, moved by the
+// current estimate, with its closest target point (kd-tree, Sec. III-A), rejects pairs farther
+// apart than `max_correspondence_distance` (not in the paper, which assumes the data to be a
+// subset of the model), and registers the original source points to their closest points in
+// closed form (Sec. III-C: SVD or unit quaternion, closed_form.hpp). `accelerated` adds the
+// paper's accelerated ICP (Sec. IV-E): when the last registration-vector steps point the same
+// way, the vector is extrapolated along the step by a line or parabola fitted to the errors.
+//
+// Presets: configs/icp.yaml, configs/icp-accelerated.yaml. Method page: docs/methods/icp.md.
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/closed_form.hpp"
+#include "slam2d/registration/match_result.hpp"
+
+namespace slam2d {
+
+struct IcpConfig {
+  int max_iterations = 50;                  // 1, >= 1; registrations before giving up
+  double max_correspondence_distance = 1.0;  // m, > 0; pairs farther apart are rejected
+  int min_correspondences = 10;             // 1, >= 3; fewer pairs and the match fails
+  PointToPointSolver solver = PointToPointSolver::kSvd;  // kSvd | kQuaternion (same answer)
+  double min_mse_change = 1e-8;             // m^2, >= 0; stop when |d_{k-1} - d_k| falls below (Besl's tau)
+  double min_translation_step = 1e-4;       // m, >= 0; stop when a step moves less than this ...
+  double min_rotation_step = 1e-4;          // rad, >= 0; ... and turns less than this
+  bool accelerated = false;                 // Besl & McKay's accelerated ICP (Sec. IV-E)
+  double acceleration_angle = 0.1745329252;  // rad, in (0, pi); steps within this angle are aligned (paper: 10 deg)
+  double acceleration_max_factor = 25.0;    // 1, > 0; extrapolation capped at this times the last step (paper: 25)
+};
+
+/// Throws Error when a field is out of its range.
+void validate(const IcpConfig& config);
+
+/// Registers `source` to `target` (both in their sensor frames) from the guess. The covariance
+/// is Censi's closed form for the point-to-point metric at the final closest-point pairs;
+/// `iterations` counts registrations; `converged` is true when the MSE-change or step test
+/// stopped the loop. Fewer than 3 points in either cloud: the guess, not converged.
+MatchResult match_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
+                      const IcpConfig& config = {});
+
+}  // namespace slam2d

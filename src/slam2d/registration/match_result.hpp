@@ -1,0 +1,36 @@
+#pragma once
+// The result every scan matcher returns (the shape of small_gicp's RegistrationResult): the
+// estimate, its covariance, how the iteration ended and whether the geometry constrained it.
+//
+// Every matcher has the signature
+//   MatchResult match_<method>(const PointCloud2& target, const PointCloud2& source,
+//                              const SE2& T_target_source_guess, const <Method>Config& = {});
+// T_target_source maps source points into the target frame: p_target = T_target_source * p_source.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <functional>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct MatchResult {
+  SE2 T_target_source;                                   // the estimate
+  Covariance3 covariance = Covariance3::Identity() * 1e6;  // m^2, m rad, rad^2; huge when unknown
+  bool converged = false;       // the stopping test was met before the iteration limit
+  int iterations = 0;           // of the matcher's main loop (poses scored, for search methods)
+  std::size_t inliers = 0;      // correspondences kept at the estimate
+  double residual = 0.0;        // m, RMS of the inlier residuals at the estimate (search methods: see their header)
+  bool degenerate = false;      // the scene does not constrain every direction (degeneracy.hpp)
+  Eigen::Vector3d weak_direction = Eigen::Vector3d::Zero();  // (x, y, theta), unit; the least constrained direction
+};
+
+/// Any matcher with its configuration bound: what scan odometry, benchmarks and SLAM front ends
+/// take (matcher_registry.hpp makes one from a name or a YAML preset).
+using Matcher = std::function<MatchResult(const PointCloud2& target, const PointCloud2& source,
+                                          const SE2& T_target_source_guess)>;
+
+}  // namespace slam2d

@@ -1,0 +1,210 @@
+#include "slam2d/registration/pipeline.hpp"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/registration/covariance.hpp"
+#include "slam2d/registration/degeneracy.hpp"
+#include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/normals.hpp"
+
+namespace slam2d {
+namespace {
+
+template <typename Value>
+void require(bool ok, std::string_view stage, std::string_view field, std::string_view rule, Value value) {
+  if (ok) return;
+  std::ostringstream message;
+  message << "pipeline: " << stage << ": " << field << " must be " << rule << " (got " << value << ")";
+  throw Error(message.str());
+}
+
+bool has_normal_angle_filter(const PipelineConfig& config) {
+  for (const OutlierFilterConfig& filter : config.outlier_filters) {
+    if (std::holds_alternative<NormalAngleFilter>(filter)) return true;
+  }
+  return false;
+}
+
+// A copy of the cloud without its non-finite points (a NaN would poison every sum), and without
+// normals or weights whose count does not match the points.
+PointCloud2 finite_copy(const PointCloud2& cloud) {
+  PointCloud2 out;
+  out.points.reserve(cloud.size());
+  const bool normals = cloud.normals.size() == cloud.size();  // malformed extras are dropped
+  const bool weights = cloud.weights.size() == cloud.size();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!cloud.points[i].allFinite()) continue;
+    out.points.push_back(cloud.points[i]);
+    if (normals) out.normals.push_back(cloud.normals[i]);
+    if (weights) out.weights.push_back(cloud.weights[i]);
+  }
+  return out;
+}
+
+// Normals the configuration needs and the filters did not give: in scan order for the projective
+// search (the clouds are scans), else from the k nearest (reusing the target's kd-tree).
+void ensure_normals(PointCloud2& cloud, const PipelineConfig& config, const KdTree2* tree) {
+  if (cloud.has_normals() || cloud.empty()) return;
+  const NormalsFilter defaults;
+  const NormalEstimationConfig estimation{.neighbors = defaults.neighbors,
+                                          .max_neighbor_distance = defaults.max_neighbor_distance,
+                                          .min_neighbors = defaults.min_neighbors};
+  if (config.association.kind == AssociationKind::kProjective) {
+    estimate_normals_ordered(cloud, estimation);
+  } else if (tree != nullptr) {
+    estimate_normals(cloud, *tree, estimation);
+  } else {
+    estimate_normals(cloud, estimation);
+  }
+}
+
+// Step 1, once per match: the filtered clouds and the target's search structure. Not movable:
+// the index points into `target`.
+struct Prepared {
+  PointCloud2 target;
+  PointCloud2 source;
+  std::unique_ptr<TargetIndex> index;
+
+  Prepared(const PointCloud2& target_in, const PointCloud2& source_in, const PipelineConfig& config)
+      : target(finite_copy(target_in)), source(finite_copy(source_in)) {
+    apply_data_filters(target, config.target_filters);
+    apply_data_filters(source, config.source_filters);
+    index = std::make_unique<TargetIndex>(target, config.association);
+    if (config.minimizer == Minimizer::kPointToLine || has_normal_angle_filter(config)) {
+      ensure_normals(target, config, index->tree());
+    }
+    if (has_normal_angle_filter(config)) ensure_normals(source, config, nullptr);
+  }
+  Prepared(const Prepared&) = delete;
+  Prepared& operator=(const Prepared&) = delete;
+};
+
+// The buffers of the iterations, sized once per match.
+struct Workspace {
+  std::vector<Point2> moved;  // source points in the target frame at the current estimate
+  std::vector<PointPair> pairs;
+  std::vector<double> scratch;
+  PairedPoints paired;
+
+  explicit Workspace(std::size_t source_size) : moved(source_size) {
+    pairs.reserve(source_size);
+    scratch.reserve(source_size);
+    paired.target.reserve(source_size);
+    paired.source.reserve(source_size);
+    paired.normals.reserve(source_size);
+  }
+};
+
+// Steps 2-3: move the source by T, associate, drop pairs point-to-line cannot use, filter.
+void match_pairs(const Prepared& prepared, const SE2& T, const PipelineConfig& config, Workspace& work) {
+  const Eigen::Matrix2d R = T.rotation();
+  const Eigen::Vector2d& t = T.translation();
+  for (std::size_t i = 0; i < prepared.source.size(); ++i) work.moved[i] = R * prepared.source.points[i] + t;
+  prepared.index->associate(work.moved, work.pairs);
+  if (config.minimizer == Minimizer::kPointToLine) {
+    std::erase_if(work.pairs, [&](const PointPair& pair) { return !has_normal(prepared.target, pair.target); });
+  }
+  apply_outlier_filters(config.outlier_filters, {prepared.target, prepared.source, T}, work.pairs, work.scratch);
+}
+
+// Step 5: a small step, or a small relative change of the mean squared error.
+bool has_converged(const MinimizerStep& step, double previous_error, const ConvergenceConfig& config) {
+  const bool small_step = step.step.translation().norm() < config.translation &&
+                          std::abs(step.step.theta()) < config.rotation;
+  const bool small_change = config.error_change > 0.0 && std::isfinite(previous_error) &&
+                            std::abs(previous_error - step.mean_squared_error) <= config.error_change * previous_error;
+  return small_step || small_change;
+}
+
+// A match that could not be made: the guess, flagged, with a huge covariance.
+MatchResult failed(const SE2& guess, int iterations, std::size_t pairs) {
+  MatchResult result;
+  result.T_target_source = guess;
+  result.converged = false;
+  result.iterations = iterations;
+  result.inliers = pairs;
+  result.residual = std::numeric_limits<double>::quiet_NaN();
+  result.degenerate = true;
+  return result;
+}
+
+// At the estimate: the final pairs, Censi's covariance of the minimised metric, the RMS
+// residual and the degeneracy of the geometry.
+MatchResult summarize(Prepared& prepared, const SE2& T, const SE2& guess, bool converged, int iterations,
+                      const PipelineConfig& config, Workspace& work) {
+  match_pairs(prepared, T, config, work);
+  if (work.pairs.size() < static_cast<std::size_t>(config.min_inliers)) {
+    return failed(guess, iterations, work.pairs.size());
+  }
+  std::vector<Correspondence> correspondences;
+  correspondences.reserve(work.pairs.size());
+  for (const PointPair& pair : work.pairs) correspondences.push_back({.source = pair.source, .target = pair.target});
+  const ErrorMetric metric = error_metric(config.minimizer);
+  MatchResult result;
+  result.T_target_source = T;
+  result.converged = converged;
+  result.iterations = iterations;
+  result.inliers = correspondences.size();
+  result.covariance = censi_covariance(prepared.target, prepared.source, T, correspondences, metric,
+                                       {.range_sigma = config.range_sigma});
+  result.residual = rms_residual(prepared.target, prepared.source, T, correspondences, metric);
+  ensure_normals(prepared.target, config, prepared.index->tree());
+  apply(analyze_degeneracy(prepared.target, prepared.source, T, correspondences), result);
+  return result;
+}
+
+}  // namespace
+
+void validate(const AssociationConfig& association) {
+  require(association.max_distance > 0.0, "association", "max_distance", "> 0", association.max_distance);
+  require(association.window >= 0, "association", "window", ">= 0", association.window);
+}
+
+void validate(const ConvergenceConfig& convergence) {
+  require(convergence.max_iterations >= 1, "convergence", "max_iterations", ">= 1", convergence.max_iterations);
+  require(convergence.translation >= 0.0, "convergence", "translation", ">= 0", convergence.translation);
+  require(convergence.rotation >= 0.0, "convergence", "rotation", ">= 0", convergence.rotation);
+  require(convergence.error_change >= 0.0, "convergence", "error_change", ">= 0", convergence.error_change);
+}
+
+void validate(const PipelineConfig& config) {
+  for (const DataFilterConfig& filter : config.source_filters) validate(filter);
+  for (const DataFilterConfig& filter : config.target_filters) validate(filter);
+  for (const OutlierFilterConfig& filter : config.outlier_filters) validate(filter);
+  validate(config.association);
+  validate(config.convergence);
+  require(config.min_inliers >= 3, "config", "min_inliers", ">= 3", config.min_inliers);
+  require(config.range_sigma > 0.0, "config", "range_sigma", "> 0", config.range_sigma);
+}
+
+MatchResult match_pipeline(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
+                           const PipelineConfig& config) {
+  validate(config);
+  check(T_target_source_guess.vector().allFinite(), "match_pipeline: the initial guess is not finite");
+  Prepared prepared(target, source, config);  // Step 1
+  const auto min_inliers = static_cast<std::size_t>(config.min_inliers);
+  if (prepared.source.size() < min_inliers || prepared.target.size() < 3) return failed(T_target_source_guess, 0, 0);
+  Workspace work(prepared.source.size());
+  SE2 T = T_target_source_guess;
+  double previous_error = std::numeric_limits<double>::infinity();
+  bool converged = false;
+  int iterations = 0;
+  while (iterations < config.convergence.max_iterations && !converged) {
+    match_pairs(prepared, T, config, work);  // Steps 2-3
+    if (work.pairs.size() < min_inliers) return failed(T_target_source_guess, iterations, work.pairs.size());
+    const auto step = minimize_step(config.minimizer, prepared.target, work.moved, work.pairs, work.paired);  // Step 4
+    if (!step) return failed(T_target_source_guess, iterations, work.pairs.size());
+    T = step->step * T;
+    ++iterations;
+    converged = has_converged(*step, previous_error, config.convergence);  // Step 5
+    previous_error = step->mean_squared_error;
+  }
+  return summarize(prepared, T, T_target_source_guess, converged, iterations, config, work);
+}
+
+}  // namespace slam2d

@@ -1,0 +1,147 @@
+#pragma once
+// The filters of the modular ICP pipeline (pipeline.hpp), after libpointmatcher's data-points
+// filters and outlier filters: F. Pomerleau, F. Colas, R. Siegwart, S. Magnenat, "Comparing ICP
+// variants on real-world data sets", Autonomous Robots 34(3), 2013, Sec. 3 (Fig. 1: reading and
+// reference filters, matching, outlier rejection, error minimisation, transformation checks), and
+// their review "A review of point cloud registration algorithms for mobile robotics",
+// Foundations and Trends in Robotics 4(1), 2015, Sec. 4.1 (filtering) and 4.3 (rejection).
+//
+// A data filter runs once per match on a cloud in its sensor frame; an outlier filter runs at
+// every iteration on the current pairs. Each filter is a small struct of its parameters; a list
+// of them is a std::vector of std::variant, visited once per filter and call, never per point.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+// ---------------------------------------------------------------------------------------------
+// Data filters (once per match).
+
+/// Keeps the points whose distance from the sensor (the cloud's origin) lies in [min, max].
+struct RangeClipFilter {
+  double min = 0.0;                                       // m, >= 0
+  double max = std::numeric_limits<double>::infinity();  // m, > min
+
+  bool operator==(const RangeClipFilter&) const = default;
+};
+
+/// Replaces the points of each occupied cell of a square grid aligned with the origin (cell
+/// [i size, (i+1) size) x [j size, (j+1) size)) by their centroid; normals (if any) by their
+/// normalised mean, weights (if any) by their mean. The cells come out in the order of their
+/// first point, so a scan stays in beam order.
+struct VoxelGridFilter {
+  double size = 0.05;  // m, cell side, > 0
+
+  bool operator==(const VoxelGridFilter&) const = default;
+};
+
+/// Keeps exactly max(1, round(ratio n)) of the n points, each subset of that size equally likely
+/// (selection sampling, D. Knuth, TAOCP Vol. 2, Algorithm 3.4.2 S), in their original order.
+/// The same seed gives the same subset.
+struct RandomSubsampleFilter {
+  double ratio = 0.5;      // 1, fraction kept, in (0, 1]
+  std::uint64_t seed = 1;  // of slam2d::Rng
+
+  bool operator==(const RandomSubsampleFilter&) const = default;
+};
+
+/// Sets the cloud's normals (the tangent's perpendicular, facing the sensor) by a line fit to
+/// the neighbours (normals.hpp): the k nearest (kd-tree) or, when `ordered`, the neighbours in
+/// scan order. Points with too few neighbours get no normal.
+struct NormalsFilter {
+  int neighbors = 5;                   // 1, points in the fit (itself included), >= 2
+  double max_neighbor_distance = 0.5;  // m, farther neighbours are left out, > 0
+  int min_neighbors = 3;               // 1, fewer points in the fit give no normal, >= 2
+  bool ordered = false;                // neighbours in scan order (the cloud must be in beam order)
+
+  bool operator==(const NormalsFilter&) const = default;
+};
+
+using DataFilterConfig = std::variant<RangeClipFilter, VoxelGridFilter, RandomSubsampleFilter, NormalsFilter>;
+
+/// The filter's `kind` in a YAML file: range_clip, voxel, random, normals.
+std::string_view kind_name(const DataFilterConfig& filter);
+/// Throws Error naming the filter and the parameter when a value is out of range.
+void validate(const DataFilterConfig& filter);
+/// Applies one filter (validated) to the cloud in place.
+void apply_data_filter(PointCloud2& cloud, const DataFilterConfig& filter);
+/// Applies the filters in order.
+void apply_data_filters(PointCloud2& cloud, const std::vector<DataFilterConfig>& filters);
+
+// ---------------------------------------------------------------------------------------------
+// Outlier filters (every iteration, in order, on the pairs left by the previous one).
+
+/// One pair of the association: source point `source`, moved by the current estimate T, against
+/// target point `target`.
+struct PointPair {
+  std::size_t source = 0;
+  std::size_t target = 0;
+  double squared_distance = 0.0;  // m^2, |T p_source - q_target|^2
+};
+
+/// Rejects the pairs farther apart than `distance`.
+struct MaxDistanceFilter {
+  double distance = 0.5;  // m, > 0
+
+  bool operator==(const MaxDistanceFilter&) const = default;
+};
+
+/// Keeps the max(1, round(ratio n)) closest of the n pairs (least trimmed squares, D. Chetverikov et al.,
+/// "The trimmed iterative closest point algorithm", ICPR 2002); ties at the cut are kept in order.
+struct TrimmedFilter {
+  double ratio = 0.9;  // 1, fraction kept, in (0, 1]
+
+  bool operator==(const TrimmedFilter&) const = default;
+};
+
+/// Rejects the pairs farther apart than factor x the `quantile` of the pair distances: the
+/// median factor filter of libpointmatcher with quantile 0.5, Censi's adaptive outlier rejection
+/// (CSM's outliers_adaptive_order 0.7, outliers_adaptive_mult 2) with quantile 0.7. The
+/// q-quantile of n distances is the ceil(q n)-th smallest (for an even count the lower median).
+struct MedianFactorFilter {
+  double factor = 3.0;    // 1, >= 1
+  double quantile = 0.5;  // 1, in (0, 1]
+
+  bool operator==(const MedianFactorFilter&) const = default;
+};
+
+/// Rejects the pairs whose normals (the source's rotated by T) differ by more than `max_angle`,
+/// and the pairs where either point has no normal.
+struct NormalAngleFilter {
+  double max_angle = std::numbers::pi / 4.0;  // rad, in [0, pi]
+
+  bool operator==(const NormalAngleFilter&) const = default;
+};
+
+using OutlierFilterConfig = std::variant<MaxDistanceFilter, TrimmedFilter, MedianFactorFilter, NormalAngleFilter>;
+
+/// The filter's `kind` in a YAML file: max_distance, trimmed, median_factor, normal_angle.
+std::string_view kind_name(const OutlierFilterConfig& filter);
+void validate(const OutlierFilterConfig& filter);
+
+/// What an outlier filter may look at besides the pairs.
+struct PairContext {
+  const PointCloud2& target;
+  const PointCloud2& source;
+  const SE2& T_target_source;  // the current estimate
+};
+
+/// Removes the pairs the filter rejects, keeping the others in order. The filter must be valid
+/// (validate(); match_pipeline checks once per match, not per iteration). `scratch` is a buffer
+/// the caller reuses across calls (no allocation once it has grown).
+void apply_outlier_filter(const OutlierFilterConfig& filter, const PairContext& context, std::vector<PointPair>& pairs,
+                          std::vector<double>& scratch);
+/// Applies the filters in order.
+void apply_outlier_filters(const std::vector<OutlierFilterConfig>& filters, const PairContext& context,
+                           std::vector<PointPair>& pairs, std::vector<double>& scratch);
+
+}  // namespace slam2d

@@ -1,0 +1,102 @@
+#pragma once
+// The matching and error-minimisation stages of the modular ICP pipeline (pipeline.hpp), after
+// F. Pomerleau, F. Colas, R. Siegwart, S. Magnenat, "Comparing ICP variants on real-world data
+// sets", Autonomous Robots 34(3), 2013, Sec. 3, and their 2015 review, Sec. 4.2 and 4.4:
+// - association: the closest target point by kd-tree, or the projective search of ordered scans
+//   (the target points sorted by bearing; the closest among +-window places around the source
+//   point's bearing, as in A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008,
+//   Sec. IV-B);
+// - minimisation: point-to-point in closed form (P. Besl, N. McKay, "A method for registration of
+//   3-D shapes", PAMI 14(2), 1992, Sec. III-C), or point-to-line / point-to-plane by linear least
+//   squares under the small-angle linearisation (K.-L. Low, "Linear least-squares optimization
+//   for point-to-plane ICP surface registration", TR04-004, UNC 2004, Sec. 2); both by the
+//   shared solvers of closed_form.hpp.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/covariance.hpp"
+#include "slam2d/registration/pipeline_filters.hpp"
+
+namespace slam2d {
+
+class KdTree2;
+
+enum class AssociationKind {
+  kKdTree,      // the closest target point (any cloud)
+  kProjective,  // the closest within +-window places in bearing order (clouds in their sensor frames)
+};
+
+struct AssociationConfig {
+  AssociationKind kind = AssociationKind::kKdTree;
+  double max_distance = 1.0;  // m, > 0; no pair is formed with a closest point farther than this
+  int window = 5;             // places on either side of the bearing, >= 0 (projective only)
+
+  bool operator==(const AssociationConfig&) const = default;
+};
+
+enum class Minimizer {
+  kPointToPoint,  // |T p - q|^2, closed form (Besl & McKay 1992)
+  kPointToLine,   // (n_q^T (T p - q))^2 on the target normals, linear least squares (Low 2004)
+};
+
+/// The metric a minimiser minimises (for censi_covariance and rms_residual).
+ErrorMetric error_metric(Minimizer minimizer);
+
+/// The target's search structure, built once per match over the filtered target, which must
+/// outlive it unchanged: a kd-tree, or the target's bearings in ascending order.
+class TargetIndex {
+ public:
+  TargetIndex(const PointCloud2& target, const AssociationConfig& config);
+  ~TargetIndex();
+  TargetIndex(const TargetIndex&) = delete;
+  TargetIndex& operator=(const TargetIndex&) = delete;
+
+  /// Pairs each moved source point (moved[i] = T p_i, in the target frame) with its closest
+  /// target point by the configured search, when within max_distance; overwrites `pairs`
+  /// (no allocation once it has grown).
+  void associate(const std::vector<Point2>& moved, std::vector<PointPair>& pairs) const;
+
+  /// The kd-tree over the target points (nullptr for the projective search).
+  const KdTree2* tree() const { return tree_.get(); }
+
+ private:
+  std::size_t closest_projective(const Point2& query, double& squared_distance) const;
+
+  const PointCloud2* target_;
+  AssociationConfig config_;
+  std::unique_ptr<KdTree2> tree_;
+  std::vector<double> bearings_;     // pseudo-angles of the target points, ascending
+  std::vector<std::size_t> order_;   // the target point of each entry of bearings_
+};
+
+/// A monotonic stand-in for the bearing atan2(y, x) mapped to [0, 2 pi): the "diamond angle" in
+/// [0, 4), with no trigonometry. The same order as the bearing, so good for sorted searches.
+double pseudo_bearing(const Point2& p);
+
+struct MinimizerStep {
+  SE2 step;                   // the update, applied on the left: T <- step * T
+  double mean_squared_error;  // m^2, of the pairs at the current T under the metric, before the step
+};
+
+/// The paired points handed to the closed-form solvers (closed_form.hpp); reused across
+/// iterations, so no allocation once grown.
+struct PairedPoints {
+  std::vector<Point2> target;
+  std::vector<Point2> source;  // moved by the current estimate
+  std::vector<Point2> normals;  // the target's (point-to-line)
+};
+
+/// One minimisation of the metric over the pairs at the current estimate (moved[i] = T p_i).
+/// Point-to-line skips pairs whose target point has no normal. nullopt when the pairs do not
+/// determine the step (fewer than 2 pairs for point-to-point, fewer than 3 or no constraint at
+/// all for point-to-line; an unconstrained direction of point-to-line gets no motion).
+std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target,
+                                           const std::vector<Point2>& moved, const std::vector<PointPair>& pairs,
+                                           PairedPoints& paired);
+
+}  // namespace slam2d

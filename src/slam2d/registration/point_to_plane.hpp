@@ -1,0 +1,38 @@
+#pragma once
+// Point-to-plane ICP by linear least squares: K.-L. Low, "Linear least-squares optimization for
+// point-to-plane ICP surface registration", TR04-004, UNC Chapel Hill, 2004, in the plane (the
+// "plane" is the line through a target point along its normal). Each iteration pairs every
+// source point, moved by the current estimate, with its closest target point (kd-tree), rejects
+// far pairs and targets without a normal, and solves Low's small-angle linear system for the
+// increment (solve_point_to_plane, closed_form.hpp), applied with the exact rotation. Target
+// normals are the target's own, or estimate_normals (k nearest neighbours) when it has none.
+//
+// Preset: configs/point-to-plane.yaml. Method page: docs/methods/icp.md.
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/match_result.hpp"
+
+namespace slam2d {
+
+struct PointToPlaneConfig {
+  int max_iterations = 30;                   // 1, >= 1; linear solves before giving up
+  double max_correspondence_distance = 0.3;  // m, > 0; pairs farther apart are rejected (at 1 m surfaces one scan does not see pull the tests' pairs 2.4 cm off)
+  int min_correspondences = 10;              // 1, >= 3; fewer pairs and the match fails
+  double min_translation_step = 1e-4;        // m, >= 0; stop when an increment moves less than this ...
+  double min_rotation_step = 1e-4;           // rad, >= 0; ... and turns less than this
+  int normal_neighbors = 5;                  // 1, >= 2; k of the kNN normal fit when the target has no normals
+  double normal_max_distance = 0.5;          // m, > 0; neighbours farther away stay out of the fit
+  int normal_min_neighbors = 3;              // 1, >= 2; fewer fitted points and the target point has no normal
+};
+
+/// Throws Error when a field is out of its range.
+void validate(const PointToPlaneConfig& config);
+
+/// Registers `source` to `target` (both in their sensor frames) from the guess. The covariance
+/// is Censi's closed form for the point-to-line metric (the pairs as Correspondence with
+/// target2 = kNoPoint, along the target normals); residual is the RMS point-to-line distance.
+MatchResult match_point_to_plane(const PointCloud2& target, const PointCloud2& source,
+                                 const SE2& T_target_source_guess, const PointToPlaneConfig& config = {});
+
+}  // namespace slam2d

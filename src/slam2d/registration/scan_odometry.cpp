@@ -1,0 +1,126 @@
+// Scan-to-scan odometry with keyframes (CSM's ROS laser_scan_matcher); see scan_odometry.hpp.
+
+#include "slam2d/registration/scan_odometry.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+namespace {
+
+bool finite_at_least(double value, double minimum) { return std::isfinite(value) && value >= minimum; }
+
+}  // namespace
+
+void validate(const ScanOdometryConfig& config) {
+  check(finite_at_least(config.keyframe_distance, 0.0), "scan odometry: keyframe_distance must be >= 0");
+  check(finite_at_least(config.keyframe_angle, 0.0), "scan odometry: keyframe_angle must be >= 0");
+  check(finite_at_least(config.min_range, 0.0), "scan odometry: min_range must be >= 0");
+  check(config.max_range > config.min_range && !std::isnan(config.max_range),
+        "scan odometry: max_range must be > min_range");
+  check(config.max_guess_dt > 0.0 && !std::isnan(config.max_guess_dt), "scan odometry: max_guess_dt must be > 0");
+  check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0,
+        "scan odometry: min_inlier_fraction must be in [0, 1]");
+  check(config.max_residual > 0.0 && !std::isnan(config.max_residual), "scan odometry: max_residual must be > 0");
+  check(config.max_correction_distance > 0.0 && !std::isnan(config.max_correction_distance),
+        "scan odometry: max_correction_distance must be > 0");
+  check(config.max_correction_angle > 0.0 && !std::isnan(config.max_correction_angle),
+        "scan odometry: max_correction_angle must be > 0");
+}
+
+ScanOdometry::ScanOdometry(Matcher matcher, const ScanOdometryConfig& config)
+    : matcher_(std::move(matcher)), config_(config) {
+  check(static_cast<bool>(matcher_), "scan odometry: no matcher given");
+  validate(config_);
+}
+
+PointCloud2 ScanOdometry::usable_cloud(const LaserScan& scan) const {
+  PointCloud2 cloud = to_point_cloud(scan, ScanFrame::kSensor).cloud;
+  std::size_t kept = 0;
+  for (const Point2& p : cloud.points) {
+    const double range = p.norm();
+    if (range >= config_.min_range && range < config_.max_range) cloud.points[kept++] = p;
+  }
+  cloud.points.resize(kept);
+  cloud.normals.clear();
+  cloud.weights.clear();
+  return cloud;
+}
+
+// The motion from the keyframe to the new scan: odometry when both have it, else constant velocity.
+SE2 ScanOdometry::predict(double stamp, const std::optional<SE2>& odom_pose) const {
+  if (odom_pose && keyframe_->odom_pose) return keyframe_->odom_pose->between(*odom_pose);
+  const SE2 T_keyframe_previous = keyframe_->T_world_robot.between(T_world_previous_);
+  const double dt = stamp - previous_stamp_;
+  if (!velocity_ || !(dt > 0.0) || dt > config_.max_guess_dt) return T_keyframe_previous;
+  return T_keyframe_previous * SE2::exp(velocity_->log() * (dt / velocity_dt_));
+}
+
+bool ScanOdometry::passes_gate(const MatchResult& match, const SE2& guess, std::size_t points) const {
+  if (config_.require_convergence && !match.converged) return false;
+  if (!match.T_target_source.vector().allFinite()) return false;
+  if (static_cast<double>(match.inliers) < config_.min_inlier_fraction * static_cast<double>(points)) return false;
+  if (!(match.residual <= config_.max_residual)) return false;
+  const SE2 correction = guess.between(match.T_target_source);
+  return correction.translation().norm() <= config_.max_correction_distance &&
+         std::abs(correction.theta()) <= config_.max_correction_angle;
+}
+
+void ScanOdometry::update_velocity(double stamp, const SE2& T_world_robot) {
+  const double dt = stamp - previous_stamp_;
+  if (dt > 0.0 && dt <= config_.max_guess_dt) {
+    velocity_ = T_world_previous_.between(T_world_robot);
+    velocity_dt_ = dt;
+  } else {
+    velocity_.reset();
+  }
+  T_world_previous_ = T_world_robot;
+  previous_stamp_ = stamp;
+}
+
+SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
+  ++stats_.scans;
+  PointCloud2 cloud = usable_cloud(scan);
+  if (!keyframe_) {  // the first scan fixes the world frame
+    const SE2 pose = odom_pose.value_or(SE2());
+    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
+    ++stats_.keyframes;
+    T_world_previous_ = pose;
+    previous_stamp_ = scan.stamp;
+    trajectory_.push_back(scan.stamp, pose);
+    return pose;
+  }
+  const SE2 guess = predict(scan.stamp, odom_pose);  // T_keyframe_robot
+  SE2 T_keyframe_robot = guess;
+  last_accepted_ = false;
+  if (cloud.size() >= 3) {
+    const SE2 guess_sensor = keyframe_->T_robot_sensor.inverse() * guess * scan.T_robot_sensor;
+    const auto start = std::chrono::steady_clock::now();
+    last_match_ = matcher_(keyframe_->cloud, cloud, guess_sensor);
+    stats_.matcher_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++stats_.matches;
+    stats_.total_iterations += static_cast<std::size_t>(std::max(0, last_match_.iterations));
+    last_accepted_ = passes_gate(last_match_, guess_sensor, cloud.size());
+    if (last_accepted_) {
+      T_keyframe_robot = keyframe_->T_robot_sensor * last_match_.T_target_source * scan.T_robot_sensor.inverse();
+    }
+  }
+  if (!last_accepted_) ++stats_.failures;
+  const SE2 pose = keyframe_->T_world_robot * T_keyframe_robot;
+  update_velocity(scan.stamp, pose);
+  trajectory_.push_back(scan.stamp, pose);
+  const bool moved = T_keyframe_robot.translation().norm() >= config_.keyframe_distance ||
+                     std::abs(T_keyframe_robot.theta()) >= config_.keyframe_angle;
+  const bool lost = !last_accepted_ && cloud.size() >= 3;
+  if (moved || lost) {
+    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
+    ++stats_.keyframes;
+  }
+  return pose;
+}
+
+}  // namespace slam2d

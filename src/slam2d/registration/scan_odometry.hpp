@@ -1,0 +1,105 @@
+#pragma once
+// Scan-to-scan odometry with keyframes, as in the ROS wrapper of Censi's CSM
+// (laser_scan_matcher, I. Dryanovski and W. Morris, scan_tools): each scan is matched against
+// the last keyframe scan, and becomes the new keyframe once the robot has moved
+// keyframe_distance or turned keyframe_angle from it (their kf_dist_linear = 0.1 m and
+// kf_dist_angular = 10 deg, the defaults here). Matching against a keyframe instead of the
+// previous scan keeps a slow or standing robot from integrating the matcher's noise.
+//
+// The initial guess is the wheel odometry between the keyframe and the scan when both have it,
+// moved into the sensor frames with each scan's T_robot_sensor; else a constant-velocity
+// prediction (the last relative motion per second, extrapolated over the scan's time step, or
+// no motion after a gap longer than max_guess_dt). A match is accepted when it passes the gate
+// (all thresholds in ScanOdometryConfig):
+//   - the matcher converged (require_convergence),
+//   - its inliers are at least min_inlier_fraction of the scan's usable points,
+//   - its RMS residual is at most max_residual,
+//   - it moved the guess by at most max_correction_distance and max_correction_angle
+//     (in the keyframe's sensor frame: the correction is guess^-1 * result).
+// Otherwise the guess is taken, a failure is counted and the scan becomes the new keyframe
+// (the old one evidently no longer matches). Scans with fewer than 3 usable points are not
+// matched (a failure; the keyframe stays).
+//
+// World frame: the first scan's odometry pose T_odom_robot when it is given (so the trajectory
+// lives in the log's odometry frame), else the first scan's robot frame.
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/core/trajectory.hpp"
+#include "slam2d/registration/match_result.hpp"
+
+namespace slam2d {
+
+struct ScanOdometryConfig {
+  double keyframe_distance = 0.1;          // m, >= 0: new keyframe once |t| from it reaches this (0: every scan)
+  double keyframe_angle = 0.17453292519943295;  // rad, >= 0 (10 deg): ... or |theta| reaches this (0: every scan)
+  double min_range = 0.0;                  // m, >= 0: readings below are dropped
+  double max_range = 30.0;                 // m, > min_range: readings at or beyond are dropped (ACES
+                                           // reports no-return as 50 m; a SICK LMS is reliable to ~30 m)
+  double max_guess_dt = 1.0;               // s, > 0: no constant-velocity extrapolation over longer gaps
+  bool require_convergence = true;         // gate: the matcher must report converged
+  double min_inlier_fraction = 0.3;        // 1, in [0, 1]: gate on inliers / usable points of the scan
+  double max_residual = 0.1;               // m, > 0: gate on the matcher's RMS residual
+  double max_correction_distance = 0.5;    // m, > 0: gate on |t| of guess^-1 * result (CSM ROS: 0.5)
+  double max_correction_angle = 0.5;       // rad, > 0: gate on |theta| of guess^-1 * result
+};
+
+/// Throws Error for values outside the ranges above.
+void validate(const ScanOdometryConfig& config);
+
+struct ScanOdometryStats {
+  std::size_t scans = 0;           // added
+  std::size_t matches = 0;         // matcher calls
+  std::size_t failures = 0;        // scans whose pose came from the guess (gate failed, or too few points)
+  std::size_t keyframes = 0;       // keyframes taken, the first scan included
+  std::size_t total_iterations = 0;  // sum of MatchResult::iterations
+  double matcher_seconds = 0.0;    // s, wall time spent inside the matcher
+};
+
+class ScanOdometry {
+ public:
+  /// Throws Error for an empty matcher or an invalid config.
+  explicit ScanOdometry(Matcher matcher, const ScanOdometryConfig& config = {});
+
+  /// Adds the next scan (with the robot's odometry pose T_odom_robot at it, if known) and
+  /// returns the estimated T_world_robot at the scan.
+  SE2 add(const LaserScan& scan, std::optional<SE2> odom_pose = std::nullopt);
+
+  const Trajectory& trajectory() const { return trajectory_; }  // one pose per scan, stamped
+  const ScanOdometryStats& stats() const { return stats_; }
+  const MatchResult& last_match() const { return last_match_; }  // of the last matched scan
+  bool last_accepted() const { return last_accepted_; }          // whether the last scan's match passed the gate
+  const ScanOdometryConfig& config() const { return config_; }
+
+ private:
+  struct Keyframe {
+    PointCloud2 cloud;            // sensor frame, beam order
+    SE2 T_world_robot;
+    SE2 T_robot_sensor;
+    std::optional<SE2> odom_pose;
+  };
+
+  PointCloud2 usable_cloud(const LaserScan& scan) const;
+  SE2 predict(double stamp, const std::optional<SE2>& odom_pose) const;  // T_keyframe_robot
+  bool passes_gate(const MatchResult& match, const SE2& guess, std::size_t points) const;
+  void update_velocity(double stamp, const SE2& T_world_robot);
+
+  Matcher matcher_;
+  ScanOdometryConfig config_;
+  std::optional<Keyframe> keyframe_;
+  SE2 T_world_previous_;          // the last scan's pose
+  double previous_stamp_ = 0.0;   // s
+  std::optional<SE2> velocity_;   // the last relative motion (robot frame) per velocity_dt_
+  double velocity_dt_ = 0.0;      // s
+  Trajectory trajectory_;
+  ScanOdometryStats stats_;
+  MatchResult last_match_;
+  bool last_accepted_ = false;
+};
+
+}  // namespace slam2d

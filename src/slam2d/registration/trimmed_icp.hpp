@@ -1,0 +1,63 @@
+#pragma once
+// Trimmed ICP: D. Chetverikov, D. Svirko, D. Stepanov, P. Krsek, "The Trimmed Iterative Closest
+// Point algorithm", ICPR 2002. Least trimmed squares: each iteration pairs every source (data)
+// point with its closest target (model) point, keeps the N_po = xi N_p pairs with the smallest
+// squared distances and registers them in closed form (closed_form.hpp). The overlap xi is given
+// (`overlap`) or, with `overlap = 0`, chosen each iteration from the sorted residuals as the
+// minimiser of their objective
+//   psi(xi) = e(xi) / xi^(1 + lambda),   e(xi) = the trimmed MSE of the xi N_p best pairs,
+// over xi in [min_overlap, 1] (their lambda = 2). Stops on their three criteria: the iteration
+// limit, a small trimmed MSE, or a small relative change of it.
+//
+// When psi is minimised: the paper evaluates psi at converged registrations (one TrICP run per
+// xi tried). `kAtConvergence` (default) does that cheaply: it starts with xi = 1, and each time
+// the iteration has converged for the current xi it minimises psi over the sorted residuals
+// there; a different xi continues the iteration from that pose, the same xi ends it.
+// `kPerIteration` re-estimates xi at every iteration instead; far from the solution it keeps
+// the pairs that happen to fit already and stops early (docs/methods/icp.md has the figures).
+//
+// Preset: configs/trimmed-icp.yaml. Method page: docs/methods/icp.md.
+
+#include <cstddef>
+#include <vector>
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/closed_form.hpp"
+#include "slam2d/registration/match_result.hpp"
+
+namespace slam2d {
+
+enum class OverlapEstimation {
+  kAtConvergence,  // psi minimised where the iteration has converged for the current xi
+  kPerIteration,   // psi minimised at every iteration
+};
+
+struct TrimmedIcpConfig {
+  double overlap = 0.0;                // 1, in (0, 1], the fraction xi of source points kept; 0 = estimate it
+  double min_overlap = 0.4;            // 1, in (0, 1]; lower end of the xi search when estimated
+  double lambda = 2.0;                 // 1, > 0; exponent of psi(xi) = e / xi^(1 + lambda) (paper: 2)
+  OverlapEstimation overlap_estimation = OverlapEstimation::kAtConvergence;  // when overlap = 0
+  int max_iterations = 300;            // 1, >= 1; registrations before giving up (N_iter; 0.3 m off takes ~150)
+  double min_trimmed_mse = 1e-12;      // m^2, >= 0; stop when the trimmed MSE e falls below
+  double min_relative_change = 1e-6;   // 1, >= 0; stop when |e' - e| / e falls below
+  int min_correspondences = 10;        // 1, >= 3; fewer kept pairs and the match fails
+  PointToPointSolver solver = PointToPointSolver::kSvd;  // kSvd | kQuaternion
+};
+
+/// Throws Error when a field is out of its range.
+void validate(const TrimmedIcpConfig& config);
+
+/// The number of pairs N_po = xi N_p minimising psi(xi) = e(xi) / xi^(1 + lambda) over
+/// xi = n / N_p in [min_overlap, 1] (n >= 1), for the squared residuals sorted ascending;
+/// ties go to the larger n. 0 for an empty list.
+std::size_t trimmed_pair_count(const std::vector<double>& sorted_squared_distances, double min_overlap,
+                               double lambda);
+
+/// Registers `source` to `target` (both in their sensor frames) from the guess. The final
+/// correspondences are the kept pairs at the estimate (`inliers` = N_po); residual is the RMS of
+/// their distances; covariance is Censi's closed form for the point-to-point metric over them.
+MatchResult match_trimmed_icp(const PointCloud2& target, const PointCloud2& source,
+                              const SE2& T_target_source_guess, const TrimmedIcpConfig& config = {});
+
+}  // namespace slam2d
