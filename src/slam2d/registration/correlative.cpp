@@ -113,6 +113,10 @@ class Scorer {
  public:
   Scorer(const CorrelativeGrid& grid, const PointCloud2& source, const SE2& guess, const Window& window)
       : grid_(grid), source_(source), guess_(guess), w_(window) {
+    const double per_metre = 1.0 / grid_.resolution();
+    scaled_source_.reserve(source_.size());
+    for (const Point2& p : source_.points) scaled_source_.push_back(per_metre * p);
+    guess_in_cells_ = per_metre * (guess_.translation() - grid_.geometry().origin);
     const auto angles = static_cast<std::size_t>(2 * w_.nk + 1);
     rotations_.resize(angles);
     cos_sin_.resize(angles);
@@ -150,40 +154,50 @@ class Scorer {
 
   /// The level-0 cell of source point n at pose p (the cells score() reads).
   CellIndex cell(std::size_t n, const PoseIndex& p) const {
-    const CellIndex c = rotated_cell(source_.points[n], p.k);
+    const CellIndex c = cell_at(rotated_in_cells(n, p.k));
     return {c.x + p.i * w_.cells, c.y + p.j * w_.cells};
   }
   /// False for a point so far from the grid that its cell index is not representable.
-  bool representable(std::size_t n, int k) const {
-    return grid_.geometry().in_index_range(rotated(source_.points[n], k), GridGeometry::kMaxCellIndex / 2);
-  }
+  bool representable(std::size_t n, int k) const { return representable(rotated_in_cells(n, k)); }
 
  private:
-  /// R(theta_k) p + t_guess: the point at angle k, translation (0, 0).
-  Eigen::Vector2d rotated(const Point2& p, int k) const {
+  /// Source point n at angle k, translation (0, 0), in cells from the grid's origin:
+  /// (R(theta_k) p + t_guess - origin) / resolution, without a division per point.
+  Eigen::Vector2d rotated_in_cells(std::size_t n, int k) const {
     const Eigen::Vector2d& cs = cos_sin_[static_cast<std::size_t>(k + w_.nk)];
-    return Eigen::Vector2d(cs.x() * p.x() - cs.y() * p.y(), cs.y() * p.x() + cs.x() * p.y()) + guess_.translation();
+    const Point2& p = scaled_source_[n];
+    return Eigen::Vector2d(cs.x() * p.x() - cs.y() * p.y(), cs.y() * p.x() + cs.x() * p.y()) + guess_in_cells_;
   }
-  CellIndex rotated_cell(const Point2& p, int k) const { return grid_.geometry().cell_of(rotated(p, k)); }
+  static bool representable(const Eigen::Vector2d& q) {
+    constexpr double kLimit = GridGeometry::kMaxCellIndex / 2;
+    return std::abs(q.x()) <= kLimit && std::abs(q.y()) <= kLimit;  // false for NaN
+  }
+  static CellIndex cell_at(const Eigen::Vector2d& q) {
+    return {GridGeometry::floor_to_int(q.x()), GridGeometry::floor_to_int(q.y())};
+  }
 
   void rotate(int k) {
     Rotation& r = rotations_[static_cast<std::size_t>(k + w_.nk)];
-    r.offsets.reserve(source_.size());
+    r.offsets.resize(source_.size());
+    // A cell is read at every translation of the window when [c - reach, c + reach] stays in
+    // the stored raster.
     const int reach_x = w_.nx * w_.cells;
     const int reach_y = w_.ny * w_.cells;
     const int pad = grid_.padding();
+    const int x_min = reach_x - pad, x_end = grid_.width() + pad - reach_x;
+    const int y_min = reach_y - pad, y_end = grid_.height() + pad - reach_y;
+    std::size_t inside = 0;
     for (std::size_t n = 0; n < source_.size(); ++n) {
-      const Eigen::Vector2d q = rotated(source_.points[n], k);
-      if (!grid_.geometry().in_index_range(q, GridGeometry::kMaxCellIndex / 2)) continue;  // 0 at every pose
-      const CellIndex c = grid_.geometry().cell_of(q);
-      const bool inside = c.x - reach_x >= -pad && c.x + reach_x < grid_.width() + pad && c.y - reach_y >= -pad &&
-                          c.y + reach_y < grid_.height() + pad;
-      if (inside) {
-        r.offsets.push_back(static_cast<std::int32_t>(grid_.stored_index(c.x, c.y)));
+      const Eigen::Vector2d q = rotated_in_cells(n, k);
+      if (!representable(q)) continue;  // 0 at every pose
+      const CellIndex c = cell_at(q);
+      if (c.x >= x_min && c.x < x_end && c.y >= y_min && c.y < y_end) {
+        r.offsets[inside++] = static_cast<std::int32_t>(grid_.stored_index(c.x, c.y));
       } else {
         r.clamped.push_back(c);
       }
     }
+    r.offsets.resize(inside);
   }
 
   const CorrelativeGrid& grid_;
@@ -192,6 +206,8 @@ class Scorer {
   Window w_;
   std::vector<Rotation> rotations_;
   std::vector<Eigen::Vector2d> cos_sin_;  // of each angle
+  std::vector<Point2> scaled_source_;     // cells, the source points / resolution
+  Eigen::Vector2d guess_in_cells_;        // cells, (t_guess - origin) / resolution
   mutable long long evaluations_ = 0;
 };
 

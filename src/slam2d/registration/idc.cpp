@@ -14,6 +14,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/degeneracy.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
@@ -156,15 +157,6 @@ SE2 motion_given_rotation(const PointPairs& pairs, double w) {
   const Point2 a_mean = mean_of(pairs.moved);
   const Point2 b_mean = mean_of(pairs.target);
   return SE2(b_mean - SE2(0.0, 0.0, w).rotation() * a_mean, w);
-}
-
-MatchResult failed_match(const SE2& guess, int iterations) {
-  MatchResult result;
-  result.T_target_source = guess;
-  result.iterations = iterations;
-  result.converged = false;
-  result.degenerate = true;
-  return result;
 }
 
 // ---- Polyline search ----
@@ -615,7 +607,7 @@ MatchResult match_imrp(const PointCloud2& target, const PointCloud2& source, con
     const double window = shrinking(config.window_initial, config.window_final, config.window_decay, k);  // Eq. (6)
     const PointPairs pairs = matching_range_pairs(polyline, source, T, window, config.max_range_difference);  // Eq. (2)
     const std::optional<SE2> D = range_rule_motion(pairs, T.translation(), min_pairs);  // Eq. (3')
-    if (!D) return failed_match(T_target_source_guess, k + 1);
+    if (!D) return unmatched(T_target_source_guess, k + 1);
     const SE2 next = *D * T;
     result.iterations = k + 1;
     result.converged = convergence.reached(T, next, config.translation_tolerance, config.rotation_tolerance,
@@ -644,7 +636,7 @@ MatchResult match_idc(const PointCloud2& target, const PointCloud2& source, cons
     const PointPairs closest = closest_point_pairs(polyline, source, T, max_distance);  // Eq. (1)
     const PointPairs range = matching_range_pairs(polyline, source, T, window, config.max_range_difference);  // Eq. (2)
     const std::optional<SE2> range_motion = range_rule_motion(range, T.translation(), min_pairs);  // Eq. (3')
-    if (closest.size() < min_pairs || !range_motion) return failed_match(T_target_source_guess, k + 1);
+    if (closest.size() < min_pairs || !range_motion) return unmatched(T_target_source_guess, k + 1);
     const SE2 next = motion_given_rotation(closest, range_motion->theta()) * T;  // Eq. (5)
     result.iterations = k + 1;
     result.converged = convergence.reached(T, next, config.translation_tolerance, config.rotation_tolerance,

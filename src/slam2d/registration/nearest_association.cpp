@@ -78,9 +78,10 @@ void finish_match(const PointCloud2& target, const PointCloud2& source,
   apply(analyze_degeneracy(target, source, result.T_target_source, correspondences), result);
 }
 
-MatchResult unmatched(const SE2& T_target_source_guess) {
+MatchResult unmatched(const SE2& T_target_source_guess, int iterations) {
   MatchResult result;
   result.T_target_source = T_target_source_guess;
+  result.iterations = iterations;
   result.degenerate = true;
   return result;
 }

@@ -53,9 +53,9 @@ void finish_match(const PointCloud2& target, const PointCloud2& source,
                   const std::vector<Correspondence>& correspondences, ErrorMetric metric,
                   std::size_t min_correspondences, MatchResult& result);
 
-/// The result of a match that could not start (too few points): the guess, not converged, huge
-/// covariance, degenerate.
-MatchResult unmatched(const SE2& T_target_source_guess);
+/// The result of a match that could not start (too few points) or failed after `iterations`:
+/// the guess, not converged, huge covariance, degenerate.
+MatchResult unmatched(const SE2& T_target_source_guess, int iterations = 0);
 
 /// True when `after` differs from `before` by less than `translation` (m) and `rotation` (rad).
 bool step_below(const SE2& before, const SE2& after, double translation, double rotation);

@@ -12,7 +12,6 @@
 #include <memory>
 #include <numbers>
 
-#include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/degeneracy.hpp"
@@ -22,9 +21,31 @@ namespace slam2d {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// The search compares bearings as pseudo-angles (pseudo_bearing below): a half turn is 2.
+constexpr double kHalfTurn = 2.0;
+constexpr double kFullTurn = 4.0;
 constexpr double kMinRange = 1e-3;  // m: points this close to the sensor have no bearing
 constexpr int kNone = -1;
+
+// ---------------------------------------------------------------------------------------------
+// A pseudo-angle of (x, y) in (-2, 2] ("diamond angle"): strictly increasing with the bearing
+// atan2(y, x) on (-pi, pi], 0 at 0, +-1 at +-pi/2, 2 at pi, and a half turn adds exactly 2
+// (mod 4). The search only compares bearings with each other and with a half turn, so these
+// comparisons give the same answers as with radians, at one division instead of an arctangent.
+inline double pseudo_bearing(double y, double x) {
+  const double sum = std::abs(x) + std::abs(y);
+  if (sum == 0.0) return 0.0;
+  const double a = y / sum;
+  if (x >= 0.0) return a;
+  return y >= 0.0 ? kHalfTurn - a : -kHalfTurn - a;
+}
+
+// The pseudo-angle difference wrapped into [-2, 2).
+inline double wrap_half_turn(double difference) {
+  while (difference >= kHalfTurn) difference -= kFullTurn;
+  while (difference < -kHalfTurn) difference += kFullTurn;
+  return difference;
+}
 
 // ---------------------------------------------------------------------------------------------
 // The target, prepared once per match: its usable points in scan order with their ranges, unit
@@ -34,12 +55,12 @@ struct TargetIndex {
   std::vector<Point2> points;         // m
   std::vector<Point2> directions;     // unit bearing vectors
   std::vector<double> ranges;         // m
-  std::vector<double> bearings;       // rad, unwrapped, strictly increasing when `ordered`
+  std::vector<double> bearings;       // pseudo-angles, unwrapped, strictly increasing when `ordered`
   std::vector<Point2> segment_normals;  // unit normal of the segment (k, k + 1)
   std::vector<double> segment_lengths;  // m, |p_{k+1} - p_k|
   std::vector<int> up_bigger, up_smaller, down_bigger, down_smaller;
   bool ordered = false;               // bearings increase over less than a full turn
-  double gap_center = 0.0;            // rad, the middle of the unscanned sector
+  double gap_center = 0.0;            // pseudo-angle, the middle of the unscanned sector
   std::unique_ptr<KdTree2> tree;      // kd-tree search (config, or an unordered target)
 
   int size() const { return static_cast<int>(points.size()); }
@@ -80,18 +101,23 @@ void unwrap_bearings(TargetIndex& t) {
   t.ordered = n >= 2;
   double previous = 0.0;
   for (int k = 0; k < n; ++k) {
-    const double raw = fast_atan2(t.points[k].y(), t.points[k].x());
-    t.bearings[k] = k == 0 ? raw : t.bearings[k - 1] + normalize_angle(raw - previous);
+    const double raw = pseudo_bearing(t.points[k].y(), t.points[k].x());
+    t.bearings[k] = k == 0 ? raw : t.bearings[k - 1] + wrap_half_turn(raw - previous);
     if (k > 0 && !(t.bearings[k] > t.bearings[k - 1])) t.ordered = false;
     previous = raw;
   }
-  if (n >= 2 && t.bearings[n - 1] - t.bearings[0] >= kTwoPi) t.ordered = false;
-  if (n >= 1) t.gap_center = t.bearings[n - 1] + 0.5 * (kTwoPi - (t.bearings[n - 1] - t.bearings[0]));
+  if (n >= 2 && t.bearings[n - 1] - t.bearings[0] >= kFullTurn) t.ordered = false;
+  if (n >= 1) t.gap_center = t.bearings[n - 1] + 0.5 * (kFullTurn - (t.bearings[n - 1] - t.bearings[0]));
 }
 
 TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search) {
   TargetIndex t;
   t.original.reserve(target.size());
+  t.points.reserve(target.size());
+  t.directions.reserve(target.size());
+  t.ranges.reserve(target.size());
+  t.segment_lengths.reserve(target.size());
+  t.segment_normals.reserve(target.size());
   for (std::size_t i = 0; i < target.size(); ++i) {
     const double range = target.points[i].norm();
     if (!(range >= kMinRange) || !std::isfinite(range)) continue;
@@ -129,7 +155,7 @@ TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search) {
 struct Query {
   Point2 p;
   double rho2 = 0.0;       // m^2, |p|^2
-  double theta = 0.0;      // rad, unwrapped into the target's bearings
+  double theta = 0.0;      // pseudo-angle, unwrapped into the target's bearings
   double tail_up2 = 0.0;   // m^2, bound for the points more than a half turn up
   double tail_down2 = 0.0; // m^2, the same down
 };
@@ -142,12 +168,12 @@ double ray_distance_squared(const Point2& p, double rho2, const Point2& u) {
 
 Query make_query(const TargetIndex& t, const Point2& p) {
   Query q{p, p.squaredNorm()};
-  q.theta = fast_atan2(p.y(), p.x());
-  while (q.theta > t.gap_center) q.theta -= kTwoPi;
-  while (q.theta <= t.gap_center - kTwoPi) q.theta += kTwoPi;
+  q.theta = pseudo_bearing(p.y(), p.x());
+  while (q.theta > t.gap_center) q.theta -= kFullTurn;
+  while (q.theta <= t.gap_center - kFullTurn) q.theta += kFullTurn;
   constexpr double kNoBound = std::numeric_limits<double>::infinity();
-  q.tail_up2 = t.bearings.back() - q.theta > kPi ? ray_distance_squared(p, q.rho2, t.directions.back()) : kNoBound;
-  q.tail_down2 = q.theta - t.bearings.front() > kPi ? ray_distance_squared(p, q.rho2, t.directions.front()) : kNoBound;
+  q.tail_up2 = t.bearings.back() - q.theta > kHalfTurn ? ray_distance_squared(p, q.rho2, t.directions.back()) : kNoBound;
+  q.tail_down2 = q.theta - t.bearings.front() > kHalfTurn ? ray_distance_squared(p, q.rho2, t.directions.front()) : kNoBound;
   return q;
 }
 
@@ -156,35 +182,37 @@ struct Best {
   int index = kNone;
 };
 
-// One step of the walk on one side (direction +1 up, -1 down) from point j; false when the
-// side is done.
-bool walk_step(const TargetIndex& t, const Query& q, int direction, int& j, Best& best) {
+// One step of the walk on one side (kDirection +1 up, -1 down) from point j; false when the
+// side is done. Inlined: it is the innermost loop of the matcher.
+template <int kDirection>
+[[gnu::always_inline]] inline bool walk_step(const TargetIndex& t, const Query& q, int& j, Best& best) {
   const int n = t.size();
-  if (j < 0 || j >= n) return false;
-  const double d2 = (t.points[j] - q.p).squaredNorm();
+  if (kDirection > 0 ? j >= n : j < 0) return false;
+  const Point2& point = t.points[j];
+  const double d2 = (point - q.p).squaredNorm();
   if (d2 < best.squared_distance) best = {d2, j};
-  const double delta = direction * (t.bearings[j] - q.theta);
+  const double delta = kDirection * (t.bearings[j] - q.theta);
   if (delta < 0.0) {  // not yet past the query's bearing: no bound holds here
-    j += direction;
+    j += kDirection;
     return true;
   }
-  const bool half_turn = delta <= kPi;
-  const double tail = direction > 0 ? q.tail_up2 : q.tail_down2;
-  const double bound = half_turn ? std::min(tail, ray_distance_squared(q.p, q.rho2, t.directions[j])) : tail;
-  if (bound >= best.squared_distance) return false;
-  int next = j + direction;
-  if (half_turn) {
-    const bool farther = t.ranges[j] * t.ranges[j] >= q.p.dot(t.points[j]);  // r_j >= rho cos(delta_j)
-    const int jump = direction > 0 ? (farther ? t.up_smaller[j] : t.up_bigger[j])
-                                   : (farther ? t.down_smaller[j] : t.down_bigger[j]);
-    const int last = direction > 0 ? n - 1 : 0;
-    if (jump < 0 || jump >= n) {
-      if (direction * (t.bearings[last] - q.theta) <= kPi) return false;  // the rest is no closer
-    } else if (direction * (t.bearings[jump] - q.theta) <= kPi) {
-      next = jump;
-    }
+  const double tail = kDirection > 0 ? q.tail_up2 : q.tail_down2;
+  if (!(delta <= kHalfTurn)) {  // more than a half turn away: only the tail bound holds
+    if (tail >= best.squared_distance) return false;
+    j += kDirection;
+    return true;
   }
-  j = next;
+  if (std::min(tail, ray_distance_squared(q.p, q.rho2, t.directions[j])) >= best.squared_distance) return false;
+  const bool farther = t.ranges[j] * t.ranges[j] >= q.p.dot(point);  // r_j >= rho cos(delta_j)
+  const int jump = kDirection > 0 ? (farther ? t.up_smaller[j] : t.up_bigger[j])
+                                  : (farther ? t.down_smaller[j] : t.down_bigger[j]);
+  if (kDirection > 0 ? jump >= n : jump < 0) {
+    const int last = kDirection > 0 ? n - 1 : 0;
+    if (kDirection * (t.bearings[last] - q.theta) <= kHalfTurn) return false;  // the rest is no closer
+    j += kDirection;
+  } else {
+    j = kDirection * (t.bearings[jump] - q.theta) <= kHalfTurn ? jump : j + kDirection;
+  }
   return true;
 }
 
@@ -202,10 +230,12 @@ int projective_closest(const TargetIndex& t, const Point2& p, int hint, double m
   int down = start - 1;
   bool up_open = true;
   bool down_open = true;
-  while (up_open || down_open) {
-    if (up_open) up_open = walk_step(t, q, +1, up, best);
-    if (down_open) down_open = walk_step(t, q, -1, down, best);
+  while (up_open && down_open) {
+    up_open = walk_step<+1>(t, q, up, best);
+    down_open = walk_step<-1>(t, q, down, best);
   }
+  while (up_open) up_open = walk_step<+1>(t, q, up, best);
+  while (down_open) down_open = walk_step<-1>(t, q, down, best);
   return best.index;
 }
 
@@ -225,119 +255,132 @@ int better_neighbour(const TargetIndex& t, const Point2& p, int j1) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
+[[gnu::always_inline]] inline void add_term(PointToLineProblem& problem, const Point2& p, const Point2& q, const Point2& n,
+                                            double w) {
+  // n^T (R p + t - q) = a^T x - n^T q with a = (n_x, n_y, n^T p, n^T J p), J p = (-p_y, p_x).
+  const Eigen::Vector4d a(n.x(), n.y(), n.dot(p), n.x() * (-p.y()) + n.y() * p.x());
+  const double b = n.dot(q);
+  problem.M += w * a * a.transpose();
+  problem.g -= 2.0 * w * b * a;
+  problem.c += w * b * b;
+  ++problem.terms;
+}
+
+// Per source point, per iteration.
+struct SourcePair {
+  Point2 moved = Point2::Zero();   // Eq. (1), p_i^w
+  Point2 normal = Point2::Zero();  // unit normal of the segment
+  double distance = 0.0;           // m, from p_i^w to the line of its segment
+  int j1 = kNone, j2 = kNone;      // target (index) points of the segment, kNone: no pair
+  int hint = kNone;                // the previous iteration's j1
+
+  bool paired() const { return j1 != kNone && j2 != kNone; }
+  void drop() { j2 = kNone; }
+};
+
 // Per-iteration state, sized once before the loop (no allocation inside it).
 struct Workspace {
-  std::vector<Point2> moved;       // Eq. (1), p_i^w
-  std::vector<int> j1, j2;         // target (index) points of the segment, kNone: no pair
-  std::vector<int> hint;           // the previous iteration's j1
-  std::vector<double> distance;    // m, from p_i^w to the line of its segment
-  std::vector<Point2> normal;      // unit normal of the segment
+  std::vector<SourcePair> pairs;   // one per source point
   std::vector<double> quantiles;   // scratch for Eq. (3)
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
 
-  Workspace(std::size_t sources, std::size_t targets)
-      : moved(sources), j1(sources, kNone), j2(sources, kNone), hint(sources, kNone), distance(sources),
-        normal(sources), closest(targets) {
-    quantiles.reserve(sources);
-  }
+  Workspace(std::size_t sources, std::size_t targets) : pairs(sources), closest(targets) { quantiles.reserve(sources); }
 };
 
-void transform_points(const PointCloud2& source, const SE2& T, Workspace& ws) {  // Eq. (1)
-  const Eigen::Matrix2d R = T.rotation();
-  for (std::size_t i = 0; i < source.size(); ++i) ws.moved[i] = R * source.points[i] + T.translation();
-}
-
-void find_correspondences(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {  // Eq. (2)
+// Eq. (1) and (2), fused: move each source point, find its segment and its distance to it.
+void find_correspondences(const TargetIndex& t, const PointCloud2& source, const SE2& T, const PlIcpConfig& config,
+                          Workspace& ws) {
   const double max_squared = config.max_correspondence_distance * config.max_correspondence_distance;
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    const Point2& p = ws.moved[i];
-    const int j1 = t.ordered ? projective_closest(t, p, ws.hint[i], max_squared) : kd_tree_closest(t, p, max_squared);
-    ws.j1[i] = j1;
-    ws.j2[i] = j1 == kNone ? kNone : better_neighbour(t, p, j1);
-    if (j1 == kNone) continue;
-    ws.hint[i] = j1;
-    if (ws.j2[i] == kNone) continue;
-    ws.normal[i] = t.segment_normals[std::min(j1, ws.j2[i])];
-    ws.distance[i] = std::abs(ws.normal[i].dot(p - t.points[j1]));  // to the line, the metric of Eq. (4)
+  const Eigen::Matrix2d R = T.rotation();
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    SourcePair& s = ws.pairs[i];
+    s.moved = R * source.points[i] + T.translation();  // Eq. (1)
+    s.j1 = t.ordered ? projective_closest(t, s.moved, s.hint, max_squared) : kd_tree_closest(t, s.moved, max_squared);
+    s.j2 = kNone;
+    if (s.j1 == kNone) continue;
+    s.hint = s.j1;
+    s.j2 = better_neighbour(t, s.moved, s.j1);
+    if (s.j2 == kNone) continue;
+    s.normal = t.segment_normals[std::min(s.j1, s.j2)];
+    s.distance = std::abs(s.normal.dot(s.moved - t.points[s.j1]));  // to the line, the metric of Eq. (4)
   }
 }
 
-void drop(Workspace& ws, std::size_t i) { ws.j2[i] = kNone; }
-bool paired(const Workspace& ws, std::size_t i) { return ws.j1[i] != kNone && ws.j2[i] != kNone; }
-
-// The value at fraction f of the sorted distances (CSM's hoare_selection at floor(n f)).
-double quantile(std::vector<double>& values, double fraction) {
-  const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(fraction * static_cast<double>(values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
-
-// Eq. (3) and the other rejections: long segments, doubles, trimming. Returns the pairs kept.
-std::size_t reject_outliers(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {
-  const std::size_t n = ws.moved.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (paired(ws, i) && t.segment_lengths[std::min(ws.j1[i], ws.j2[i])] > config.max_segment_length) drop(ws, i);
-  }
-  if (config.outliers_remove_doubles) {
-    std::fill(ws.closest.begin(), ws.closest.end(), std::numeric_limits<double>::infinity());
-    for (std::size_t i = 0; i < n; ++i) {
-      if (paired(ws, i)) ws.closest[ws.j1[i]] = std::min(ws.closest[ws.j1[i]], ws.distance[i]);
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      if (paired(ws, i) && ws.distance[i] > ws.closest[ws.j1[i]]) drop(ws, i);
+// Drops pairs whose segment is too long and, of the source points sharing a j1, all but the
+// closest; collects the distances of the rest into ws.quantiles.
+void drop_long_segments_and_doubles(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {
+  const bool doubles = config.outliers_remove_doubles;
+  if (doubles) std::fill(ws.closest.begin(), ws.closest.end(), std::numeric_limits<double>::infinity());
+  for (SourcePair& s : ws.pairs) {
+    if (!s.paired()) continue;
+    if (t.segment_lengths[std::min(s.j1, s.j2)] > config.max_segment_length) {
+      s.drop();
+    } else if (doubles) {
+      ws.closest[s.j1] = std::min(ws.closest[s.j1], s.distance);
     }
   }
   ws.quantiles.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (paired(ws, i)) ws.quantiles.push_back(ws.distance[i]);
-  }
-  if (ws.quantiles.empty()) return 0;
-  const double trimmed = quantile(ws.quantiles, config.outliers_max_fraction);
-  const double adaptive = config.outliers_adaptive_mult * quantile(ws.quantiles, config.outliers_adaptive_order);
-  const double limit = std::min(trimmed, adaptive);
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!paired(ws, i)) continue;
-    if (ws.distance[i] > limit) {
-      drop(ws, i);
+  for (SourcePair& s : ws.pairs) {
+    if (!s.paired()) continue;
+    if (doubles && s.distance > ws.closest[s.j1]) {
+      s.drop();
     } else {
-      ++kept;
+      ws.quantiles.push_back(s.distance);
     }
   }
-  return kept;
 }
 
-// A hash of the association (j1, j2 per source point): when an association comes back, the
-// estimate it gives comes back too, so the loop has reached a fixed point or a cycle (CSM's
-// loop detection).
-std::uint64_t association_hash(const Workspace& ws) {
-  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    const std::uint64_t pair = paired(ws, i) ? (static_cast<std::uint64_t>(ws.j1[i]) << 32) ^ static_cast<std::uint32_t>(ws.j2[i])
-                                             : ~std::uint64_t{0};
-    hash = (hash ^ pair) * 1099511628211ULL;
-  }
-  return hash;
+// Eq. (3): min(e_(maxPerc), mult * e_(order)), e_(f) the value at fraction f of the sorted
+// distances (CSM's hoare_selection at floor(n f)); one selection for the lower fraction, a
+// second on the part above it for the higher. `values` is non-empty and gets reordered.
+double trimming_limit(const PlIcpConfig& config, std::vector<double>& values) {
+  const std::size_t n = values.size();
+  const auto rank = [n](double fraction) { return std::min(n - 1, static_cast<std::size_t>(fraction * static_cast<double>(n))); };
+  const std::size_t trimmed = rank(config.outliers_max_fraction);
+  const std::size_t adaptive = rank(config.outliers_adaptive_order);
+  const auto lower = values.begin() + static_cast<std::ptrdiff_t>(std::min(trimmed, adaptive));
+  const auto upper = values.begin() + static_cast<std::ptrdiff_t>(std::max(trimmed, adaptive));
+  std::nth_element(values.begin(), lower, values.end());
+  if (upper != lower) std::nth_element(lower + 1, upper, values.end());
+  return std::min(values[trimmed], config.outliers_adaptive_mult * values[adaptive]);
 }
+
+// The pairs kept, and a hash of the association (j1, j2 per source point): when an association
+// comes back, the estimate it gives comes back too, so the loop has reached a fixed point or a
+// cycle (CSM's loop detection).
+struct Association {
+  std::size_t kept = 0;
+  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a
+};
+
+// Eq. (3) and the other rejections: long segments, doubles, trimming.
+Association reject_outliers(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {
+  drop_long_segments_and_doubles(t, config, ws);
+  Association association;
+  if (ws.quantiles.empty()) return association;
+  const double limit = trimming_limit(config, ws.quantiles);
+  for (SourcePair& s : ws.pairs) {
+    if (s.paired() && s.distance > limit) s.drop();
+    std::uint64_t pair = ~std::uint64_t{0};
+    if (s.paired()) {
+      ++association.kept;
+      pair = (static_cast<std::uint64_t>(s.j1) << 32) ^ static_cast<std::uint32_t>(s.j2);
+    }
+    association.hash = (association.hash ^ pair) * 1099511628211ULL;
+  }
+  return association;
+}
+
+double weight(const PointCloud2& source, std::size_t i) { return source.has_weights() ? source.weights[i] : 1.0; }
 
 PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {  // Eq. (4)
   PointToLineProblem problem;
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    if (!paired(ws, i)) continue;
-    const double w = source.has_weights() ? source.weights[i] : 1.0;
-    problem.add(ws.moved[i], t.points[ws.j1[i]], ws.normal[i], w);
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    const SourcePair& s = ws.pairs[i];
+    if (s.paired()) add_term(problem, s.moved, t.points[s.j1], s.normal, weight(source, i));
   }
   return problem;
-}
-
-std::vector<Correspondence> final_correspondences(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {
-  std::vector<Correspondence> pairs;
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    if (!paired(ws, i)) continue;
-    const double w = source.has_weights() ? source.weights[i] : 1.0;
-    pairs.push_back({i, t.original[ws.j1[i]], t.original[ws.j2[i]], w});
-  }
-  return pairs;
 }
 
 // Censi 2007, Eq. (6), for the point-to-line metric in closed form (the same quantity as
@@ -349,48 +392,56 @@ std::vector<Correspondence> final_correspondences(const TargetIndex& t, const Po
 //   d2J/dx2   = sum 2 w (a a^T + e da/dx),    da/dx = e_theta e_theta^T (-n^T R p)
 //   d2J/dz dx = 2 w (de/dz a + e da/dz)       for the range z of p, q1 and q2 (each moves its
 //                                             point along its bearing u): dn/dq = -+(n^T dq / |d|) d/|d|.
-Covariance3 point_to_line_covariance(const PointCloud2& target, const PointCloud2& source, const SE2& T,
-                                     const std::vector<Correspondence>& pairs, double range_sigma) {
+// The covariance is H^-1 (sum_z d2J/dz dx d2J/dz dx^T) sigma^2 H^-1: a source point is in one
+// pair, so its column is added at once; a target point's column gathers over its pairs.
+Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& source, const SE2& T,
+                                     const Workspace& ws, double range_sigma) {
   const Eigen::Matrix2d R = T.rotation();
   const auto perpendicular = [](const Point2& v) { return Point2(-v.y(), v.x()); };
-  const auto bearing = [](const Point2& v) { const double r = v.norm(); return r > 1e-12 ? Point2(v / r) : Point2(0.0, 0.0); };
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  std::vector<Eigen::Vector3d> columns(source.size() + target.size(), Eigen::Vector3d::Zero());
-  for (const Correspondence& c : pairs) {
-    const Point2& q1 = target.points[c.target];
-    const Point2 d = target.points[c.target2] - q1;
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  std::vector<Eigen::Vector3d> target_columns(t.points.size(), Eigen::Vector3d::Zero());
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    const SourcePair& s = ws.pairs[i];
+    if (!s.paired()) continue;
+    ++pairs;
+    const Point2& q1 = t.points[s.j1];
+    const Point2 d = t.points[s.j2] - q1;
     const double length = d.norm();
     if (!(length > 1e-12)) continue;
     const Point2 along = d / length;
     const Point2 n = perpendicular(along);
-    const Point2 Rp = R * source.points[c.source];
+    const Point2& p = source.points[i];
+    const Point2 Rp = R * p;
     const Point2 dRp = perpendicular(Rp);  // d(R p)/d theta
     const Point2 offset = Rp + T.translation() - q1;
     const double e = n.dot(offset);
-    const double w2 = 2.0 * c.weight;
+    const double w2 = 2.0 * weight(source, i);
     const Eigen::Vector3d a(n.x(), n.y(), n.dot(dRp));
     H += w2 * a * a.transpose();
     H(2, 2) -= w2 * e * n.dot(Rp);
-    const auto add = [&](std::size_t column, double de, const Point2& dn, double dn_theta) {
-      columns[column] += w2 * (de * a + e * Eigen::Vector3d(dn.x(), dn.y(), dn_theta));
+    const auto column = [&](double de, const Point2& dn, double dn_theta) -> Eigen::Vector3d {
+      return w2 * (de * a + e * Eigen::Vector3d(dn.x(), dn.y(), dn_theta));
     };
-    const Point2 Ru = R * bearing(source.points[c.source]);
-    add(c.source, n.dot(Ru), Point2::Zero(), n.dot(perpendicular(Ru)));
-    const double beta1 = n.dot(bearing(q1));
+    const double range = p.norm();
+    const Point2 Ru = range > 1e-12 ? Point2(R * (p / range)) : Point2::Zero();
+    const Eigen::Vector3d source_column = column(n.dot(Ru), Point2::Zero(), n.dot(perpendicular(Ru)));
+    spread += source_column * source_column.transpose();
+    const double beta1 = n.dot(t.directions[s.j1]);
     const Point2 dn1 = (beta1 / length) * along;
-    add(source.size() + c.target, beta1 * (along.dot(offset) / length - 1.0), dn1, dn1.dot(dRp));
-    const Point2 dn2 = -(n.dot(bearing(target.points[c.target2])) / length) * along;
-    add(source.size() + c.target2, dn2.dot(offset), dn2, dn2.dot(dRp));
+    target_columns[s.j1] += column(beta1 * (along.dot(offset) / length - 1.0), dn1, dn1.dot(dRp));
+    const Point2 dn2 = -(n.dot(t.directions[s.j2]) / length) * along;
+    target_columns[s.j2] += column(dn2.dot(offset), dn2, dn2.dot(dRp));
   }
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
   const double scale = H.diagonal().cwiseAbs().maxCoeff();
-  if (pairs.size() < 3 || ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(scale > 0.0) ||
+  if (pairs < 3 || ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(scale > 0.0) ||
       ldlt.vectorD().minCoeff() <= 1e-12 * scale) {
     return Covariance3::Identity() * 1e6;
   }
   const Eigen::Matrix3d H_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
-  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
-  for (const Eigen::Vector3d& column : columns) spread += column * column.transpose();
+  for (const Eigen::Vector3d& c : target_columns) spread += c * c.transpose();
   spread *= range_sigma * range_sigma;
   const Covariance3 covariance = H_inverse * spread * H_inverse;
   if (!covariance.allFinite()) return Covariance3::Identity() * 1e6;
@@ -424,29 +475,44 @@ Point2 fitted_normal(const TargetIndex& t, int k, double max_gap) {
   return normal.squaredNorm() > 0.0 ? Point2(normal.normalized()) : Point2::Zero();
 }
 
-// Degeneracy (degeneracy.hpp) from the final pairs, with fitted normals at their j1.
-DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& target, const PointCloud2& source, const SE2& T,
-                                     const TargetIndex& t, const Workspace& ws, const PlIcpConfig& config) {
-  PointCloud2 with_normals;
-  with_normals.points = target.points;
-  with_normals.normals.assign(target.size(), Point2::Zero());
-  std::vector<Correspondence> pairs;
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    if (!paired(ws, i)) continue;
-    const std::size_t j = t.original[ws.j1[i]];
-    if (with_normals.normals[j].squaredNorm() == 0.0) with_normals.normals[j] = fitted_normal(t, ws.j1[i], config.max_segment_length);
-    pairs.push_back({i, j, kNoPoint, 1.0});
+// Degeneracy (degeneracy.hpp) from the final pairs, with fitted normals at their j1: the Fisher
+// information that analyze_degeneracy sums for these pairs, here without copying the target.
+DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, const TargetIndex& t,
+                                     const Workspace& ws, const PlIcpConfig& config) {
+  const DegeneracyConfig degeneracy{.range_sigma = config.range_sigma};
+  const double inverse_variance = 1.0 / (config.range_sigma * config.range_sigma);
+  const Eigen::Matrix2d R = T.rotation();
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  double squared_radius_sum = 0.0;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    const SourcePair& s = ws.pairs[i];
+    if (!s.paired()) continue;
+    const Point2 n = fitted_normal(t, s.j1, config.max_segment_length);
+    if (!(n.squaredNorm() > 0.5)) continue;  // no fitted normal (has_normal)
+    const Point2 Rp = R * source.points[i];
+    const Eigen::Vector3d a(n.x(), n.y(), n.dot(Point2(-Rp.y(), Rp.x())));
+    information += inverse_variance * a * a.transpose();
+    squared_radius_sum += source.points[i].squaredNorm();
+    ++used;
   }
-  return analyze_degeneracy(with_normals, source, T, pairs, {.range_sigma = config.range_sigma});
+  if (used < 3) {
+    DegeneracyAnalysis analysis;
+    analysis.information = information;
+    analysis.weak_direction = Eigen::Vector3d::UnitX();
+    return analysis;
+  }
+  return analyze_information(information, std::sqrt(squared_radius_sum / static_cast<double>(used)), degeneracy);
 }
 
 // The weighted RMS point-to-line distance of the pairs.
 double rms_point_to_line(const PointCloud2& source, const Workspace& ws) {
   double sum = 0.0, weights = 0.0;
-  for (std::size_t i = 0; i < ws.moved.size(); ++i) {
-    if (!paired(ws, i)) continue;
-    const double w = source.has_weights() ? source.weights[i] : 1.0;
-    sum += w * ws.distance[i] * ws.distance[i];
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    const SourcePair& s = ws.pairs[i];
+    if (!s.paired()) continue;
+    const double w = weight(source, i);
+    sum += w * s.distance * s.distance;
     weights += w;
   }
   return weights > 0.0 ? std::sqrt(sum / weights) : 0.0;
@@ -454,25 +520,25 @@ double rms_point_to_line(const PointCloud2& source, const Workspace& ws) {
 
 // The result at the estimate: the association there (`associated_at_T`: the workspace holds it
 // already), its covariance (Censi 2007), RMS residual and degeneracy.
-MatchResult finish(const PointCloud2& target, const PointCloud2& source, const TargetIndex& t, const SE2& T,
-                   bool converged, bool associated_at_T, int iterations, const PlIcpConfig& config, Workspace& ws) {
+MatchResult finish(const PointCloud2& source, const TargetIndex& t, const SE2& T, bool converged,
+                   bool associated_at_T, int iterations, const PlIcpConfig& config, Workspace& ws) {
   if (!associated_at_T) {
-    transform_points(source, T, ws);
-    find_correspondences(t, config, ws);
+    find_correspondences(t, source, T, config, ws);
     reject_outliers(t, config, ws);
   }
-  const std::vector<Correspondence> pairs = final_correspondences(t, source, ws);
+  const auto inliers = static_cast<std::size_t>(
+      std::count_if(ws.pairs.begin(), ws.pairs.end(), [](const SourcePair& s) { return s.paired(); }));
   MatchResult result;
   result.T_target_source = T;
   result.iterations = iterations;
-  result.inliers = pairs.size();
-  const bool enough = pairs.size() >= static_cast<std::size_t>(config.min_correspondences);
+  result.inliers = inliers;
+  const bool enough = inliers >= static_cast<std::size_t>(config.min_correspondences);
   result.converged = converged && enough;
   if (enough) {
-    result.covariance = point_to_line_covariance(target, source, T, pairs, config.range_sigma);
+    result.covariance = point_to_line_covariance(t, source, T, ws, config.range_sigma);
     result.residual = rms_point_to_line(source, ws);
   }
-  apply(pl_icp_degeneracy(target, source, T, t, ws, config), result);
+  apply(pl_icp_degeneracy(source, T, t, ws, config), result);
   return result;
 }
 
@@ -583,13 +649,7 @@ double fast_atan2(double y, double x) {
 }
 
 void PointToLineProblem::add(const Point2& p, const Point2& q, const Point2& n, double w) {
-  // n^T (R p + t - q) = a^T x - n^T q with a = (n_x, n_y, n^T p, n^T J p), J p = (-p_y, p_x).
-  const Eigen::Vector4d a(n.x(), n.y(), n.dot(p), n.x() * (-p.y()) + n.y() * p.x());
-  const double b = n.dot(q);
-  M += w * a * a.transpose();
-  g -= 2.0 * w * b * a;
-  c += w * b * b;
-  ++terms;
+  add_term(*this, p, q, n, w);
 }
 
 double PointToLineProblem::cost(const SE2& T) const {
@@ -668,11 +728,11 @@ std::vector<Correspondence> pl_icp_correspondences(const PointCloud2& target, co
   std::vector<Correspondence> pairs;
   if (t.size() == 0) return pairs;
   Workspace ws(source.size(), t.points.size());
-  transform_points(source, T_target_source, ws);
-  find_correspondences(t, config, ws);
+  find_correspondences(t, source, T_target_source, config, ws);
   for (std::size_t i = 0; i < source.size(); ++i) {
-    if (ws.j1[i] == kNone) continue;
-    pairs.push_back({i, t.original[ws.j1[i]], ws.j2[i] == kNone ? kNoPoint : t.original[ws.j2[i]], 1.0});
+    const SourcePair& s = ws.pairs[i];
+    if (s.j1 == kNone) continue;
+    pairs.push_back({i, t.original[s.j1], s.j2 == kNone ? kNoPoint : t.original[s.j2], 1.0});
   }
   return pairs;
 }
@@ -696,22 +756,21 @@ MatchResult match_pl_icp(const PointCloud2& target, const PointCloud2& source, c
   associations.reserve(static_cast<std::size_t>(config.max_iterations));
   while (iteration < config.max_iterations && !converged) {
     ++iteration;
-    transform_points(source, T, ws);                                                            // Eq. (1)
-    find_correspondences(t, config, ws);                                                        // Eq. (2)
-    if (reject_outliers(t, config, ws) < static_cast<std::size_t>(config.min_correspondences)) break;  // Eq. (3)
-    const std::uint64_t association = association_hash(ws);
-    if (std::find(associations.begin(), associations.end(), association) != associations.end()) {
+    find_correspondences(t, source, T, config, ws);                                             // Eq. (1)-(2)
+    const Association association = reject_outliers(t, config, ws);                             // Eq. (3)
+    if (association.kept < static_cast<std::size_t>(config.min_correspondences)) break;
+    if (std::find(associations.begin(), associations.end(), association.hash) != associations.end()) {
       converged = true;  // a fixed point or a cycle of associations: nothing new to learn
       associated_at_T = true;
       break;
     }
-    associations.push_back(association);
+    associations.push_back(association.hash);
     const std::optional<SE2> step = minimize_point_to_line(build_problem(t, source, ws));      // Eq. (4)-(6)
     if (!step) break;
     T = *step * T;
     converged = step->translation().norm() < config.epsilon_xy && std::abs(step->theta()) < config.epsilon_theta;  // Eq. (7)
   }
-  return finish(target, source, t, T, converged, associated_at_T, iteration, config, ws);
+  return finish(source, t, T, converged, associated_at_T, iteration, config, ws);
 }
 
 }  // namespace slam2d

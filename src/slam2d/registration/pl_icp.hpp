@@ -24,7 +24,8 @@
 // scan up and down from the previous iteration's match (or from the bearing of p_i^w), skipping
 // runs of points with the jump tables (the next point farther / nearer from the sensor on either
 // side) and stopping each side with the bound |p| sin(delta bearing). It is exact: it finds the
-// same j1 as the kd-tree (see pl_icp.cpp for the bounds, a slight sharpening of CSM's).
+// same j1 as the kd-tree (see pl_icp.cpp for the bounds, a slight sharpening of CSM's). Bearings
+// are compared as pseudo-angles (monotone in the bearing, a half turn = 2), one division each.
 
 #include <cstddef>
 #include <optional>
@@ -101,7 +102,8 @@ std::optional<SE2> minimize_point_to_line(const PointToLineProblem& problem);
 /// Newton polish; returns their count (0 to 4) in roots[0..count).
 int solve_quartic(double a, double b, double c, double d, double e, double roots[4]);
 
-/// atan2 to within 1e-7 rad (Abramowitz & Stegun 4.4.49), for bearings in the search.
+/// atan2 to within 1e-7 rad (Abramowitz & Stegun 4.4.49). (The projective search itself compares
+/// pseudo-angles, which need no arctangent; see pl_icp.cpp.)
 double fast_atan2(double y, double x);
 
 }  // namespace slam2d

@@ -16,6 +16,7 @@
 #include "slam2d/registration/covariance.hpp"
 #include "slam2d/registration/degeneracy.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
@@ -160,15 +161,6 @@ bool small_step(const SE2& before, const SE2& after, const TangentSearchConfig& 
          std::abs(step.theta()) <= config.rotation_tolerance;
 }
 
-MatchResult failed_match(const SE2& guess, int iterations) {
-  MatchResult result;
-  result.T_target_source = guess;
-  result.iterations = iterations;
-  result.converged = false;
-  result.degenerate = true;
-  return result;
-}
-
 // Fills inliers, residual, covariance and the degeneracy verdict from the final pairs.
 void finish(const PointCloud2& target, const PointCloud2& source, const TangentPairs& pairs,
             const TangentSearchConfig& config, MatchResult& result) {
@@ -254,7 +246,7 @@ MatchResult match_tangent_search(const PointCloud2& target, const PointCloud2& s
                                  const SE2& T_target_source_guess, const TangentSearchConfig& config) {
   validate(config);
   const auto min_pairs = static_cast<std::size_t>(config.min_correspondences);
-  if (target.size() < min_pairs || source.size() < min_pairs) return failed_match(T_target_source_guess, 0);
+  if (target.size() < min_pairs || source.size() < min_pairs) return unmatched(T_target_source_guess, 0);
   const PointCloud2 target_tangents = with_tangents(target, config);
   const PointCloud2 source_tangents = with_tangents(source, config);
   const KdTree2 tree(target_tangents.points);
@@ -267,7 +259,7 @@ MatchResult match_tangent_search(const PointCloud2& target, const PointCloud2& s
     const double max_distance = std::max(config.max_distance_final,
                                          config.max_distance_initial * std::exp(-config.max_distance_decay * k));
     pairs = pair_points(target_tangents, tree, source_tangents, T, max_distance, config.max_tangent_difference);
-    if (pairs.size() < min_pairs) return failed_match(T_target_source_guess, k + 1);
+    if (pairs.size() < min_pairs) return unmatched(T_target_source_guess, k + 1);
     const SE2 next = rotation_search(pairs, T, config.rotation_search_width);  // Eq. (2)-(4)
     result.iterations = k + 1;
     const bool settled = max_distance == config.max_distance_final;

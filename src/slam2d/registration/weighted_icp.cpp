@@ -11,6 +11,7 @@
 #include "slam2d/registration/closed_form.hpp"
 #include "slam2d/registration/degeneracy.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
@@ -170,15 +171,6 @@ bool small_update(const SE2& before, const SE2& after, const WeightedIcpConfig& 
          std::abs(angle_difference(after.theta(), before.theta())) <= config.rotation_tolerance;
 }
 
-MatchResult failed_match(const SE2& guess, int iterations) {
-  MatchResult result;
-  result.T_target_source = guess;
-  result.iterations = iterations;
-  result.converged = false;
-  result.degenerate = true;
-  return result;
-}
-
 /// Re-associates at the estimate and fills covariance, residual, inliers and degeneracy.
 MatchResult finish(const Problem& problem, const SE2& T, const WeightedIcpConfig& config, MatchResult result) {
   std::vector<Pair> pairs;
@@ -241,7 +233,7 @@ double pair_weight(double distance, const WeightedIcpConfig& config) {
 MatchResult match_weighted_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                                const WeightedIcpConfig& config) {
   validate(config);
-  if (target.size() < kMinCloudPoints || source.size() < kMinCloudPoints) return failed_match(T_target_source_guess, 0);
+  if (target.size() < kMinCloudPoints || source.size() < kMinCloudPoints) return unmatched(T_target_source_guess, 0);
   const KdTree2 tree(target.points);  // indexes target.points, which the copy with normals shares
   PointCloud2 target_storage, source_storage;
   const PointCloud2& target_n = with_normals(target, target_storage, config, &tree);  // degeneracy needs them
@@ -255,9 +247,9 @@ MatchResult match_weighted_icp(const PointCloud2& target, const PointCloud2& sou
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     result.iterations = iteration;
     associate(problem, T, config, pairs);                                         // steps 2-4
-    if (!usable_count(pairs, config)) return failed_match(T_target_source_guess, iteration);
+    if (!usable_count(pairs, config)) return unmatched(T_target_source_guess, iteration);
     const std::optional<SE2> next = minimise(problem, pairs, T, config, lists);       // steps 5-6
-    if (!next) return failed_match(T_target_source_guess, iteration);
+    if (!next) return unmatched(T_target_source_guess, iteration);
     const bool converged = small_update(T, *next, config);
     T = *next;
     if (converged) {
