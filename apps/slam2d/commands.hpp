@@ -13,5 +13,6 @@ void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_odometry_command(CLI::App& app);
 void add_match_bench_command(CLI::App& app);
+void add_optimize_command(CLI::App& app);
 
 }  // namespace slam2d::cli

@@ -63,6 +63,11 @@ JsonObject& JsonObject::add(std::string_view key, const JsonObject& value) {
   members_.push_back({std::string(key), "", "", std::make_shared<const JsonObject>(value)});
   return *this;
 }
+JsonObject& JsonObject::merge(const JsonObject& other) {
+  members_.insert(members_.end(), other.members_.begin(), other.members_.end());
+  return *this;
+}
+
 JsonObject& JsonObject::add_null(std::string_view key) { return add_scalar(key, "null", "null"); }
 
 std::string JsonObject::dump(int indent) const {

@@ -23,6 +23,8 @@ class JsonObject {
   JsonObject& add(std::string_view key, const std::optional<double>& value);
   JsonObject& add(std::string_view key, const JsonObject& value);
   JsonObject& add_null(std::string_view key);
+  /// Appends the other object's members, in their order.
+  JsonObject& merge(const JsonObject& other);
 
   /// Pretty-printed with two-space indentation and a trailing newline at the top level.
   std::string dump(int indent = 0) const;

@@ -20,7 +20,7 @@ void add_map_command(CLI::App& app) {
   command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
   command->add_option("--range-max", options->range_max,
                       "m: FLASER readings at or above are no-return (default: the log's PARAM, else 80)");
-  command->add_flag("--no-odometry", options->no_odometry, "hector: ignore the log's odometry (initial guess: the last pose)");
+  command->add_flag("--no-odometry", options->no_odometry, "hector, graph: ignore the log's odometry (initial guess: the last pose or constant velocity)");
   command->add_option("--levels", options->levels, "hector: map pyramid levels")
       ->check(CLI::Range(1, 16))
       ->capture_default_str();

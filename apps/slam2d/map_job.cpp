@@ -14,6 +14,9 @@
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/io/pose_graph_io.hpp"
+#include "slam2d/optim/pose_graph.hpp"
+#include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
 
 namespace slam2d::cli {
@@ -23,6 +26,8 @@ namespace {
 struct MappingRun {
   OccupancyMap map;
   Trajectory trajectory;
+  std::optional<PoseGraph> graph;  // graph SLAM's optimised pose graph
+  JsonObject method_summary;       // what the method adds to summary.json
   std::size_t backwards_timestamps = 0;
   std::size_t skipped_lines = 0;
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
@@ -86,6 +91,29 @@ MappingRun map_with_hector(const MapJobOptions& options) {
   return run;
 }
 
+// Graph SLAM (slam/graph): keyframes, scan-to-local-map constraints, loop closure, sparse pose
+// adjustment. The trajectory's scans between keyframes follow the odometry between them.
+MappingRun map_with_graph(const MapJobOptions& options) {
+  GraphSlamConfig config;
+  config.map_resolution = options.resolution;
+  GraphSlam slam(config);
+  MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
+    const std::optional<SE2> odometry = options.no_odometry ? std::nullopt : std::optional<SE2>(laser.odom_pose);
+    return slam.add_scan(laser.scan, odometry).T_map_robot;
+  });
+  slam.finish();
+  run.trajectory = slam.trajectory();
+  run.map = slam.map();
+  run.graph = slam.graph();
+  const GraphSlamStats& stats = slam.stats();
+  run.method_summary.add("odometry", !options.no_odometry).add("keyframes", stats.keyframes);
+  run.method_summary.add("loop_closures", stats.loop_closures).add("near_links", stats.near_links);
+  run.method_summary.add("loop_attempts", stats.loop_attempts);
+  run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
+  run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
+  return run;
+}
+
 std::vector<SE2> poses_of(const Trajectory& trajectory) {
   std::vector<SE2> poses;
   poses.reserve(trajectory.size());
@@ -98,25 +126,32 @@ void write_outputs(const std::filesystem::path& dir, const MappingRun& run, cons
   write_map((dir / "map.yaml").string(), run.map, "map.pgm");
   write_png((dir / "map.png").string(), render_map(run.map, poses_of(run.trajectory)));
   write_trajectory((dir / "trajectory.txt").string(), run.trajectory);
+  if (run.graph) write_g2o((dir / "graph.g2o").string(), to_pose_graph_file(*run.graph));
   write_file_atomically((dir / "summary.json").string(), summary.dump());
+}
+
+MappingRun run_method(const MapJobOptions& options) {
+  if (options.method == "hector") return map_with_hector(options);
+  if (options.method == "graph") return map_with_graph(options);
+  return map_with_odometry(options);
 }
 
 }  // namespace
 
 const std::vector<std::string>& map_methods() {
-  static const std::vector<std::string> methods{"odometry", "hector"};
+  static const std::vector<std::string> methods{"odometry", "hector", "graph"};
   return methods;
 }
 
 MapJobResult run_map_job(const MapJobOptions& options) {
   const auto& methods = map_methods();
   check(std::find(methods.begin(), methods.end(), options.method) != methods.end(),
-        "map: unknown method '" + options.method + "' (known: odometry, hector)");
+        "map: unknown method '" + options.method + "' (known: odometry, hector, graph)");
   check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
   check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
   check(!options.range_max || *options.range_max > 0.0, "map: --range-max must be positive");
   const RunClock clock;
-  MappingRun run = options.method == "hector" ? map_with_hector(options) : map_with_odometry(options);
+  MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();
   const double wall = clock.wall_seconds();
 
@@ -126,6 +161,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("realtime_factor", cpu > 0.0 ? std::optional<double>(run.data_duration / cpu) : std::nullopt);
   summary.add("us_per_scan", 1e6 * cpu / static_cast<double>(run.trajectory.size()));
   if (options.method == "hector") summary.add("odometry", !options.no_odometry).add("levels", options.levels);
+  summary.merge(run.method_summary);
   summary.add("resolution", options.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("peak_rss_mb", peak_rss_mb());

@@ -17,6 +17,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/pl_icp_search.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -215,6 +216,58 @@ TEST(PlIcpSearch, ProjectiveAgreesOnFullCircleAndNarrowScans) {
       expect_searches_agree(pair, T, 100.0);
     }
   }
+}
+
+// The closest target point within max_distance by exhaustive search over the usable points
+// (pl_icp_detail indices), kNone if none.
+int brute_force_within(const pl_icp_detail::TargetIndex& t, const Point2& p, double max_distance) {
+  int best = pl_icp_detail::kNone;
+  double best_squared = max_distance * max_distance;
+  for (int j = 0; j < t.size(); ++j) {
+    const double d2 = (t.points[j] - p).squaredNorm();
+    if (d2 < best_squared) {
+      best_squared = d2;
+      best = j;
+    }
+  }
+  return best;
+}
+
+// The tracked search of the ICP loop (window fast path, walk, clearance certificate) along a
+// path of estimates that closes in on the truth, as the iterations do: every answer is the
+// brute-force one, and most of the late ones come from the certificate.
+TEST(PlIcpSearch, TrackedSearchEqualsBruteForceAlongTheIterations) {
+  using namespace pl_icp_detail;
+  const ScanPair office = make_scan_pair(testing::office_world());
+  const ScanPair room = make_scan_pair(testing::room_world(), {.T_world_target = SE2(0.5, -0.5, 0.3)});
+  const ScanPair wide = make_scan_pair(testing::office_world(), {.T_world_target = SE2(7.0, 2.5, 0.3), .beams = 360,
+                                                                 .field_of_view = 2.0 * kPi - 2.0 * kPi / 360.0});
+  std::size_t queries = 0, certified = 0;
+  for (const ScanPair* pair : {&office, &room, &wide}) {
+    const TargetIndex t = prepare_target(pair->target, PlIcpSearch::kProjective);
+    ASSERT_TRUE(t.ordered);
+    for (const double max_distance : {0.3, 2.0}) {
+      for (const SE2& offset : {SE2(0.3, -0.2, 0.2), SE2(-0.4, 0.1, -0.5), SE2(0.05, 0.05, 0.01)}) {
+        std::vector<TrackedNearest> tracked(pair->source.size());
+        for (int step = 0; step < 12; ++step) {
+          const double shrink = std::pow(0.3, step);  // the estimate converges to the truth
+          const SE2 error(shrink * offset.x(), shrink * offset.y(), shrink * offset.theta());
+          const SE2 T = pair->T_target_source * error;
+          int previous = kNone;
+          for (std::size_t i = 0; i < pair->source.size(); ++i) {
+            const Point2 p = T * pair->source.points[i];
+            const Point2 anchor = tracked[i].anchor;
+            const int found = track_nearest(t, p, max_distance, tracked[i], previous);
+            ASSERT_EQ(found, brute_force_within(t, p, max_distance)) << "point " << i << " step " << step;
+            if (found != kNone) previous = found;
+            ++queries;
+            if (step > 0 && tracked[i].anchor == anchor) ++certified;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(certified, queries / 2);
 }
 
 ScanPair office_pair(const SE2& T_target_source, std::uint64_t seed = 1) {

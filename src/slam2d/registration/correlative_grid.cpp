@@ -22,15 +22,18 @@ constexpr double kMaxStoredCells = static_cast<double>(1LL << 28);
 /// The kernel of Eq. (1) on a squared distance (m^2): the integer score of a cell centre.
 class Kernel {
  public:
-  explicit Kernel(double max_distance) : max_squared_(max_distance * max_distance) {}
+  explicit Kernel(double max_distance)
+      : max_squared_(max_distance * max_distance), score_per_squared_(kMaxCellScore / max_squared_) {}
   double max_squared() const { return max_squared_; }
   std::uint8_t operator()(double squared_distance) const {
     if (!(squared_distance < max_squared_)) return 0;
-    return static_cast<std::uint8_t>(std::lround(kMaxCellScore * (1.0 - squared_distance / max_squared_)));
+    // Round half up; the value is in [0, kMaxCellScore], so this is lround without its call.
+    return static_cast<std::uint8_t>(kMaxCellScore - score_per_squared_ * squared_distance + 0.5);
   }
 
  private:
   double max_squared_;
+  double score_per_squared_;
 };
 
 double squared_distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
@@ -61,6 +64,8 @@ void validate(const CorrelativeGridConfig& config) {
         "CorrelativeGridConfig: max_segment_length must be finite and >= 0 (m)");
   check(config.levels >= 1 && config.levels <= 16,
         "CorrelativeGridConfig: levels must lie in [1, 16], got " + std::to_string(config.levels));
+  check(std::isfinite(config.margin) && config.margin >= 0.0, "CorrelativeGridConfig: margin must be finite and >= 0 (m)");
+  check(config.margin / config.resolution <= 1e5, "CorrelativeGridConfig: margin spans more than 10^5 cells");
   check(config.truncation * config.sigma / config.resolution <= 1e4,
         "CorrelativeGridConfig: the kernel radius truncation * sigma spans more than 10^4 cells");
 }
@@ -89,7 +94,8 @@ void CorrelativeGrid::rasterize(const PointCloud2& cloud) {
     low = low.cwiseMin(p);
     high = high.cwiseMax(p);
   }
-  const int margin = radius + 1;  // the kernel, then a ring of zero cells
+  // The kernel, then a ring of zero cells (wider by the configured margin).
+  const int margin = radius + 1 + static_cast<int>(std::ceil(config_.margin / resolution));
   const Eigen::Vector2d extent = (high - low) / resolution;
   padding_ = (1 << (config_.levels - 1)) - 1;
   const double stored = (extent.x() + 2.0 * (margin + padding_) + 3.0) * (extent.y() + 2.0 * (margin + padding_) + 3.0);
@@ -106,13 +112,24 @@ void CorrelativeGrid::rasterize(const PointCloud2& cloud) {
   std::vector<std::uint8_t>& cells = levels_.emplace_back(static_cast<std::size_t>(stride_) * stored_rows_, 0);
 
   const Kernel kernel(max_distance());
-  auto splat = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {  // segment a-b (a point when a == b)
+  auto splat_point = [&](const Eigen::Vector2d& a) {  // the hot loop: squared distances by rows
+    const CellIndex c = geometry_.cell_of(a);
+    const Eigen::Vector2d first = geometry_.cell_center({c.x - radius, c.y - radius}) - a;
+    for (int v = 0; v <= 2 * radius; ++v) {
+      const double dy = first.y() + v * resolution;
+      std::uint8_t* row = cells.data() + stored_index(c.x - radius, c.y - radius + v);
+      for (int u = 0; u <= 2 * radius; ++u) {
+        const double dx = first.x() + u * resolution;
+        row[u] = std::max(row[u], kernel(dx * dx + dy * dy));
+      }
+    }
+  };
+  auto splat_segment = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     const CellIndex c0 = geometry_.cell_of(a.cwiseMin(b));
     const CellIndex c1 = geometry_.cell_of(a.cwiseMax(b));
     for (int y = c0.y - radius; y <= c1.y + radius; ++y) {
       for (int x = c0.x - radius; x <= c1.x + radius; ++x) {
-        const Eigen::Vector2d centre = geometry_.cell_center({x, y});
-        const double d2 = a == b ? (centre - a).squaredNorm() : squared_distance_to_segment(centre, a, b);
+        const double d2 = squared_distance_to_segment(geometry_.cell_center({x, y}), a, b);
         std::uint8_t& cell = cells[static_cast<std::size_t>(stored_index(x, y))];
         cell = std::max(cell, kernel(d2));
       }
@@ -120,10 +137,10 @@ void CorrelativeGrid::rasterize(const PointCloud2& cloud) {
   };
   const double max_segment2 = config_.max_segment_length * config_.max_segment_length;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    splat(cloud.points[i], cloud.points[i]);
+    splat_point(cloud.points[i]);
     if (i + 1 < cloud.size()) {
       const double gap2 = (cloud.points[i + 1] - cloud.points[i]).squaredNorm();
-      if (gap2 > 0.0 && gap2 <= max_segment2) splat(cloud.points[i], cloud.points[i + 1]);
+      if (gap2 > 0.0 && gap2 <= max_segment2) splat_segment(cloud.points[i], cloud.points[i + 1]);
     }
   }
 }

@@ -43,6 +43,8 @@ struct CorrelativeGridConfig {
   double max_segment_length = 0.0;  // m, >= 0: consecutive target points closer than this are joined by a
                                     // segment, whose distance counts too (0: points only, as Olson)
   int levels = 8;                   // 1, in [1, 16]: max-pooled levels 0 .. levels - 1 (level k pools 2^k cells)
+  double margin = 0.0;              // m, >= 0: zero cells stored beyond the kernel around the target, so that a
+                                    // search window reaching that far past the target reads cells directly
 };
 
 class CorrelativeGrid {

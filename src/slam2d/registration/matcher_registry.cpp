@@ -164,6 +164,12 @@ void read_fields(const ConfigNode& n, CorrelativeConfig& c) {
   n.read("min_eigenvalue_ratio", c.min_eigenvalue_ratio);
 }
 
+// The cloud-to-cloud overload of a matcher that also has others (prebuilt tables or trees).
+template <typename Config>
+auto cloud_matcher(MatchResult (*match)(const PointCloud2&, const PointCloud2&, const SE2&, const Config&)) {
+  return match;
+}
+
 // A matcher bound to a config read from `node` (validated now, so a bad preset fails at load).
 template <typename Config, typename Match>
 Matcher bind(const ConfigNode& node, Config config, Match match) {
@@ -183,19 +189,14 @@ const std::vector<std::pair<std::string, Factory>>& factories() {
       {"icp-accelerated", [](const ConfigNode& n) { return bind(n, IcpConfig{.accelerated = true}, match_icp); }},
       {"trimmed-icp", [](const ConfigNode& n) { return bind(n, TrimmedIcpConfig{}, match_trimmed_icp); }},
       {"pl-icp", [](const ConfigNode& n) { return bind(n, PlIcpConfig{}, match_pl_icp); }},
-      {"point-to-plane", [](const ConfigNode& n) { return bind(n, PointToPlaneConfig{}, match_point_to_plane); }},
+      {"point-to-plane", [](const ConfigNode& n) { return bind(n, PointToPlaneConfig{}, cloud_matcher<PointToPlaneConfig>(match_point_to_plane)); }},
       {"imrp", [](const ConfigNode& n) { return bind(n, ImrpConfig{}, match_imrp); }},
       {"idc", [](const ConfigNode& n) { return bind(n, IdcConfig{}, match_idc); }},
       {"tangent-search", [](const ConfigNode& n) { return bind(n, TangentSearchConfig{}, match_tangent_search); }},
       {"boolean-icp", [](const ConfigNode& n) { return bind(n, WeightedIcpConfig{}, match_boolean_icp); }},
       {"soft-icp", [](const ConfigNode& n) { return bind(n, WeightedIcpConfig{.weighting = IcpWeighting::kSoft}, match_soft_icp); }},
       {"ga-icp", [](const ConfigNode& n) { return bind(n, GaIcpConfig{}, match_ga_icp); }},
-      {"correlative", [](const ConfigNode& n) {
-         return bind(n, CorrelativeConfig{}, [](const PointCloud2& target, const PointCloud2& source, const SE2& guess,
-                                                 const CorrelativeConfig& config) {
-           return match_correlative(target, source, guess, config);
-         });
-       }},
+      {"correlative", [](const ConfigNode& n) { return bind(n, CorrelativeConfig{}, cloud_matcher<CorrelativeConfig>(match_correlative)); }},
       {"pipeline", [](const ConfigNode& n) {
          const PipelineConfig config = n.is_null() ? PipelineConfig{} : pipeline_config_from(n);
          validate(config);

@@ -9,250 +9,19 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <numbers>
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/degeneracy.hpp"
-#include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/pl_icp_search.hpp"
 
 namespace slam2d {
 namespace {
 
+using namespace pl_icp_detail;
+
 constexpr double kPi = std::numbers::pi;
-// The search compares bearings as pseudo-angles (pseudo_bearing below): a half turn is 2.
-constexpr double kHalfTurn = 2.0;
-constexpr double kFullTurn = 4.0;
-constexpr double kMinRange = 1e-3;  // m: points this close to the sensor have no bearing
-constexpr int kNone = -1;
-
-// ---------------------------------------------------------------------------------------------
-// A pseudo-angle of (x, y) in (-2, 2] ("diamond angle"): strictly increasing with the bearing
-// atan2(y, x) on (-pi, pi], 0 at 0, +-1 at +-pi/2, 2 at pi, and a half turn adds exactly 2
-// (mod 4). The search only compares bearings with each other and with a half turn, so these
-// comparisons give the same answers as with radians, at one division instead of an arctangent.
-inline double pseudo_bearing(double y, double x) {
-  const double sum = std::abs(x) + std::abs(y);
-  if (sum == 0.0) return 0.0;
-  const double a = y / sum;
-  if (x >= 0.0) return a;
-  return y >= 0.0 ? kHalfTurn - a : -kHalfTurn - a;
-}
-
-// The pseudo-angle difference wrapped into [-2, 2).
-inline double wrap_half_turn(double difference) {
-  while (difference >= kHalfTurn) difference -= kFullTurn;
-  while (difference < -kHalfTurn) difference += kFullTurn;
-  return difference;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The target, prepared once per match: its usable points in scan order with their ranges, unit
-// bearing vectors, unwrapped bearings and the jump tables of the projective search.
-struct TargetIndex {
-  std::vector<std::size_t> original;  // cloud index of each usable point
-  std::vector<Point2> points;         // m
-  std::vector<Point2> directions;     // unit bearing vectors
-  std::vector<double> ranges;         // m
-  std::vector<double> bearings;       // pseudo-angles, unwrapped, strictly increasing when `ordered`
-  std::vector<Point2> segment_normals;  // unit normal of the segment (k, k + 1)
-  std::vector<double> segment_lengths;  // m, |p_{k+1} - p_k|
-  std::vector<int> up_bigger, up_smaller, down_bigger, down_smaller;
-  bool ordered = false;               // bearings increase over less than a full turn
-  double gap_center = 0.0;            // pseudo-angle, the middle of the unscanned sector
-  std::unique_ptr<KdTree2> tree;      // kd-tree search (config, or an unordered target)
-
-  int size() const { return static_cast<int>(points.size()); }
-};
-
-// up_bigger[i]: the first j > i with a larger range (n if none), and so on. Amortised O(n):
-// a run of points that are not larger than i is skipped with their own table entries.
-void build_jump_tables(TargetIndex& t) {
-  const int n = t.size();
-  const auto& r = t.ranges;
-  t.up_bigger.assign(n, n);
-  t.up_smaller.assign(n, n);
-  t.down_bigger.assign(n, kNone);
-  t.down_smaller.assign(n, kNone);
-  for (int i = n - 1; i >= 0; --i) {
-    int j = i + 1;
-    while (j < n && r[j] <= r[i]) j = t.up_bigger[j];
-    t.up_bigger[i] = j;
-    j = i + 1;
-    while (j < n && r[j] >= r[i]) j = t.up_smaller[j];
-    t.up_smaller[i] = j;
-  }
-  for (int i = 0; i < n; ++i) {
-    int j = i - 1;
-    while (j >= 0 && r[j] <= r[i]) j = t.down_bigger[j];
-    t.down_bigger[i] = j;
-    j = i - 1;
-    while (j >= 0 && r[j] >= r[i]) j = t.down_smaller[j];
-    t.down_smaller[i] = j;
-  }
-}
-
-// Bearings unwrapped along the scan; the projective search needs them strictly increasing
-// over less than a full turn.
-void unwrap_bearings(TargetIndex& t) {
-  const int n = t.size();
-  t.bearings.resize(n);
-  t.ordered = n >= 2;
-  double previous = 0.0;
-  for (int k = 0; k < n; ++k) {
-    const double raw = pseudo_bearing(t.points[k].y(), t.points[k].x());
-    t.bearings[k] = k == 0 ? raw : t.bearings[k - 1] + wrap_half_turn(raw - previous);
-    if (k > 0 && !(t.bearings[k] > t.bearings[k - 1])) t.ordered = false;
-    previous = raw;
-  }
-  if (n >= 2 && t.bearings[n - 1] - t.bearings[0] >= kFullTurn) t.ordered = false;
-  if (n >= 1) t.gap_center = t.bearings[n - 1] + 0.5 * (kFullTurn - (t.bearings[n - 1] - t.bearings[0]));
-}
-
-TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search) {
-  TargetIndex t;
-  t.original.reserve(target.size());
-  t.points.reserve(target.size());
-  t.directions.reserve(target.size());
-  t.ranges.reserve(target.size());
-  t.segment_lengths.reserve(target.size());
-  t.segment_normals.reserve(target.size());
-  for (std::size_t i = 0; i < target.size(); ++i) {
-    const double range = target.points[i].norm();
-    if (!(range >= kMinRange) || !std::isfinite(range)) continue;
-    t.original.push_back(i);
-    t.points.push_back(target.points[i]);
-    t.directions.push_back(target.points[i] / range);
-    t.ranges.push_back(range);
-  }
-  for (std::size_t k = 0; k + 1 < t.points.size(); ++k) {
-    const Point2 along = t.points[k + 1] - t.points[k];
-    const double length = along.norm();
-    t.segment_lengths.push_back(length);
-    t.segment_normals.push_back(length > 0.0 ? Point2(-along.y() / length, along.x() / length) : Point2::Zero());
-  }
-  unwrap_bearings(t);
-  if (search == PlIcpSearch::kProjective && t.ordered) {
-    build_jump_tables(t);
-  } else {
-    t.ordered = false;
-    t.tree = std::make_unique<KdTree2>(t.points);
-  }
-  return t;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Eq. (2), projective search. For a query p (range rho, bearing theta) and a target point j at
-// bearing offset delta_j = bearing_j - theta in [0, pi], every point k further up with
-// delta_k in [delta_j, pi] is at least rho g(delta_j) from p, g = sin below pi/2 and 1 above
-// (the distance from p to the ray of bearing k). Points beyond a half turn are at least
-// rho g(delta_max) away, g = 1 up to 3 pi / 2, |sin| above (`tail`). And a jump is exact: if
-// r_j >= rho cos(delta_j) every point up to up_smaller[j] (ranges >= r_j) is no closer than j,
-// else every point up to up_bigger[j] (ranges <= r_j) is no closer (d^2 = r^2 + rho^2 -
-// 2 r rho cos delta is monotone in r on either side of rho cos delta, and grows with delta).
-// CSM jumps on r_j < rho instead and stops on the same sine bound.
-struct Query {
-  Point2 p;
-  double rho2 = 0.0;       // m^2, |p|^2
-  double theta = 0.0;      // pseudo-angle, unwrapped into the target's bearings
-  double tail_up2 = 0.0;   // m^2, bound for the points more than a half turn up
-  double tail_down2 = 0.0; // m^2, the same down
-};
-
-// (rho g(delta))^2 for the bearing vector u: (p x u)^2 in front of p, rho^2 behind.
-double ray_distance_squared(const Point2& p, double rho2, const Point2& u) {
-  const double cross = p.x() * u.y() - p.y() * u.x();
-  return p.dot(u) > 0.0 ? cross * cross : rho2;
-}
-
-Query make_query(const TargetIndex& t, const Point2& p) {
-  Query q{p, p.squaredNorm()};
-  q.theta = pseudo_bearing(p.y(), p.x());
-  while (q.theta > t.gap_center) q.theta -= kFullTurn;
-  while (q.theta <= t.gap_center - kFullTurn) q.theta += kFullTurn;
-  constexpr double kNoBound = std::numeric_limits<double>::infinity();
-  q.tail_up2 = t.bearings.back() - q.theta > kHalfTurn ? ray_distance_squared(p, q.rho2, t.directions.back()) : kNoBound;
-  q.tail_down2 = q.theta - t.bearings.front() > kHalfTurn ? ray_distance_squared(p, q.rho2, t.directions.front()) : kNoBound;
-  return q;
-}
-
-struct Best {
-  double squared_distance;  // m^2
-  int index = kNone;
-};
-
-// One step of the walk on one side (kDirection +1 up, -1 down) from point j; false when the
-// side is done. Inlined: it is the innermost loop of the matcher.
-template <int kDirection>
-[[gnu::always_inline]] inline bool walk_step(const TargetIndex& t, const Query& q, int& j, Best& best) {
-  const int n = t.size();
-  if (kDirection > 0 ? j >= n : j < 0) return false;
-  const Point2& point = t.points[j];
-  const double d2 = (point - q.p).squaredNorm();
-  if (d2 < best.squared_distance) best = {d2, j};
-  const double delta = kDirection * (t.bearings[j] - q.theta);
-  if (delta < 0.0) {  // not yet past the query's bearing: no bound holds here
-    j += kDirection;
-    return true;
-  }
-  const double tail = kDirection > 0 ? q.tail_up2 : q.tail_down2;
-  if (!(delta <= kHalfTurn)) {  // more than a half turn away: only the tail bound holds
-    if (tail >= best.squared_distance) return false;
-    j += kDirection;
-    return true;
-  }
-  if (std::min(tail, ray_distance_squared(q.p, q.rho2, t.directions[j])) >= best.squared_distance) return false;
-  const bool farther = t.ranges[j] * t.ranges[j] >= q.p.dot(point);  // r_j >= rho cos(delta_j)
-  const int jump = kDirection > 0 ? (farther ? t.up_smaller[j] : t.up_bigger[j])
-                                  : (farther ? t.down_smaller[j] : t.down_bigger[j]);
-  if (kDirection > 0 ? jump >= n : jump < 0) {
-    const int last = kDirection > 0 ? n - 1 : 0;
-    if (kDirection * (t.bearings[last] - q.theta) <= kHalfTurn) return false;  // the rest is no closer
-    j += kDirection;
-  } else {
-    j = kDirection * (t.bearings[jump] - q.theta) <= kHalfTurn ? jump : j + kDirection;
-  }
-  return true;
-}
-
-// The closest target point within sqrt(max_squared) of p, starting at `hint` (the previous
-// iteration's match) or else at p's bearing.
-int projective_closest(const TargetIndex& t, const Point2& p, int hint, double max_squared) {
-  if (!(p.squaredNorm() >= kMinRange * kMinRange)) return kNone;
-  const Query q = make_query(t, p);
-  int start = hint;
-  if (start < 0 || start >= t.size()) {
-    start = static_cast<int>(std::lower_bound(t.bearings.begin(), t.bearings.end(), q.theta) - t.bearings.begin());
-  }
-  Best best{max_squared};
-  int up = start;
-  int down = start - 1;
-  bool up_open = true;
-  bool down_open = true;
-  while (up_open && down_open) {
-    up_open = walk_step<+1>(t, q, up, best);
-    down_open = walk_step<-1>(t, q, down, best);
-  }
-  while (up_open) up_open = walk_step<+1>(t, q, up, best);
-  while (down_open) down_open = walk_step<-1>(t, q, down, best);
-  return best.index;
-}
-
-int kd_tree_closest(const TargetIndex& t, const Point2& p, double max_squared) {
-  const Neighbor nearest = t.tree->nearest(p);
-  if (nearest.index >= t.points.size() || nearest.squared_distance >= max_squared) return kNone;
-  return static_cast<int>(nearest.index);
-}
-
-// The closer of j1's two scan neighbours.
-int better_neighbour(const TargetIndex& t, const Point2& p, int j1) {
-  const int below = j1 - 1;
-  const int above = j1 + 1;
-  if (below < 0) return above < t.size() ? above : kNone;
-  if (above >= t.size()) return below;
-  return (t.points[below] - p).squaredNorm() <= (t.points[above] - p).squaredNorm() ? below : above;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
@@ -273,7 +42,7 @@ struct SourcePair {
   Point2 normal = Point2::Zero();  // unit normal of the segment
   double distance = 0.0;           // m, from p_i^w to the line of its segment
   int j1 = kNone, j2 = kNone;      // target (index) points of the segment, kNone: no pair
-  int hint = kNone;                // the previous iteration's j1
+  TrackedNearest nearest;          // j1 across iterations, with its certificate
 
   bool paired() const { return j1 != kNone && j2 != kNone; }
   void drop() { j2 = kNone; }
@@ -284,22 +53,45 @@ struct Workspace {
   std::vector<SourcePair> pairs;   // one per source point
   std::vector<double> quantiles;   // scratch for Eq. (3)
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
+  std::vector<Eigen::Vector3d> target_columns;  // per target point, for the covariance
 
-  Workspace(std::size_t sources, std::size_t targets) : pairs(sources), closest(targets) { quantiles.reserve(sources); }
+  Workspace(std::size_t sources, std::size_t targets) : pairs(sources), closest(targets), target_columns(targets) {
+    quantiles.reserve(sources);
+  }
+};
+
+// The upper triangle of a symmetric 3x3 sum of w a a^T.
+struct SymmetricSum3 {
+  double v[6] = {};  // (0,0), (0,1), (0,2), (1,1), (1,2), (2,2)
+
+  void add(const Eigen::Vector3d& a, double w = 1.0) {
+    const double w0 = w * a(0), w1 = w * a(1);
+    v[0] += w0 * a(0);
+    v[1] += w0 * a(1);
+    v[2] += w0 * a(2);
+    v[3] += w1 * a(1);
+    v[4] += w1 * a(2);
+    v[5] += w * a(2) * a(2);
+  }
+  Eigen::Matrix3d matrix() const {
+    Eigen::Matrix3d m;
+    m << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
+    return m;
+  }
 };
 
 // Eq. (1) and (2), fused: move each source point, find its segment and its distance to it.
 void find_correspondences(const TargetIndex& t, const PointCloud2& source, const SE2& T, const PlIcpConfig& config,
                           Workspace& ws) {
-  const double max_squared = config.max_correspondence_distance * config.max_correspondence_distance;
   const Eigen::Matrix2d R = T.rotation();
+  int previous = kNone;  // the last j1 found: where a fresh walk starts (the source is a scan too)
   for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
     SourcePair& s = ws.pairs[i];
     s.moved = R * source.points[i] + T.translation();  // Eq. (1)
-    s.j1 = t.ordered ? projective_closest(t, s.moved, s.hint, max_squared) : kd_tree_closest(t, s.moved, max_squared);
+    s.j1 = track_nearest(t, s.moved, config.max_correspondence_distance, s.nearest, previous);
+    if (s.j1 != kNone) previous = s.j1;
     s.j2 = kNone;
     if (s.j1 == kNone) continue;
-    s.hint = s.j1;
     s.j2 = better_neighbour(t, s.moved, s.j1);
     if (s.j2 == kNone) continue;
     s.normal = t.segment_normals[std::min(s.j1, s.j2)];
@@ -331,6 +123,41 @@ void drop_long_segments_and_doubles(const TargetIndex& t, const PlIcpConfig& con
   }
 }
 
+// std::nth_element on values[lo, hi) for rank k (lo <= k < hi): afterwards values[k] is the
+// k-th smallest, with none larger before it and none smaller after. Quickselect with a
+// branch-free partition: the distances come in no useful order, so a partition's branches would
+// mispredict about half the time. Ranges that shrink too slowly (many equal values) are left to
+// std::nth_element.
+double select_rank(std::vector<double>& values, std::size_t lo, std::size_t hi, std::size_t k) {
+  double* v = values.data();
+  constexpr std::size_t kSmall = 12;
+  int rounds_left = 40;
+  while (hi - lo > kSmall && rounds_left-- > 0) {
+    const std::size_t mid = lo + (hi - lo) / 2;  // median of three as the pivot, moved to the end
+    if (v[mid] < v[lo]) std::swap(v[mid], v[lo]);
+    if (v[hi - 1] < v[mid]) std::swap(v[hi - 1], v[mid]);
+    if (v[mid] < v[lo]) std::swap(v[mid], v[lo]);
+    std::swap(v[mid], v[hi - 1]);
+    const double pivot = v[hi - 1];
+    std::size_t store = lo;  // v[lo, store) < pivot <= v[store, i)
+    for (std::size_t i = lo; i + 1 < hi; ++i) {
+      const double x = v[i];
+      v[i] = v[store];
+      v[store] = x;
+      store += x < pivot ? 1 : 0;
+    }
+    std::swap(v[store], v[hi - 1]);
+    if (k == store) return v[k];
+    if (k < store) {
+      hi = store;
+    } else {
+      lo = store + 1;
+    }
+  }
+  std::nth_element(v + lo, v + k, v + hi);
+  return v[k];
+}
+
 // Eq. (3): min(e_(maxPerc), mult * e_(order)), e_(f) the value at fraction f of the sorted
 // distances (CSM's hoare_selection at floor(n f)); one selection for the lower fraction, a
 // second on the part above it for the higher. `values` is non-empty and gets reordered.
@@ -339,10 +166,10 @@ double trimming_limit(const PlIcpConfig& config, std::vector<double>& values) {
   const auto rank = [n](double fraction) { return std::min(n - 1, static_cast<std::size_t>(fraction * static_cast<double>(n))); };
   const std::size_t trimmed = rank(config.outliers_max_fraction);
   const std::size_t adaptive = rank(config.outliers_adaptive_order);
-  const auto lower = values.begin() + static_cast<std::ptrdiff_t>(std::min(trimmed, adaptive));
-  const auto upper = values.begin() + static_cast<std::ptrdiff_t>(std::max(trimmed, adaptive));
-  std::nth_element(values.begin(), lower, values.end());
-  if (upper != lower) std::nth_element(lower + 1, upper, values.end());
+  const std::size_t lower = std::min(trimmed, adaptive);
+  const std::size_t upper = std::max(trimmed, adaptive);
+  select_rank(values, 0, n, lower);
+  if (upper != lower) select_rank(values, lower + 1, n, upper);
   return std::min(values[trimmed], config.outliers_adaptive_mult * values[adaptive]);
 }
 
@@ -374,12 +201,32 @@ Association reject_outliers(const TargetIndex& t, const PlIcpConfig& config, Wor
 
 double weight(const PointCloud2& source, std::size_t i) { return source.has_weights() ? source.weights[i] : 1.0; }
 
-PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {  // Eq. (4)
-  PointToLineProblem problem;
+// Eq. (4): the sum of add_term over the pairs, with the upper triangle of M in scalars.
+PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {
+  double m00 = 0, m01 = 0, m02 = 0, m03 = 0, m11 = 0, m12 = 0, m13 = 0, m22 = 0, m23 = 0, m33 = 0;
+  double g0 = 0, g1 = 0, g2 = 0, g3 = 0, c = 0;
+  std::size_t terms = 0;
   for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
     const SourcePair& s = ws.pairs[i];
-    if (s.paired()) add_term(problem, s.moved, t.points[s.j1], s.normal, weight(source, i));
+    if (!s.paired()) continue;
+    const double nx = s.normal.x(), ny = s.normal.y(), px = s.moved.x(), py = s.moved.y();
+    // a = (n_x, n_y, n^T p, n^T J p), b = n^T q (add_term).
+    const double a2 = nx * px + ny * py, a3 = ny * px - nx * py;
+    const double w = weight(source, i);
+    const double b = nx * t.points[s.j1].x() + ny * t.points[s.j1].y();
+    const double w0 = w * nx, w1 = w * ny, w2 = w * a2, w3 = w * a3;
+    m00 += w0 * nx, m01 += w0 * ny, m02 += w0 * a2, m03 += w0 * a3;
+    m11 += w1 * ny, m12 += w1 * a2, m13 += w1 * a3;
+    m22 += w2 * a2, m23 += w2 * a3, m33 += w3 * a3;
+    g0 -= 2.0 * w0 * b, g1 -= 2.0 * w1 * b, g2 -= 2.0 * w2 * b, g3 -= 2.0 * w3 * b;
+    c += w * b * b;
+    ++terms;
   }
+  PointToLineProblem problem;
+  problem.M << m00, m01, m02, m03, m01, m11, m12, m13, m02, m12, m22, m23, m03, m13, m23, m33;
+  problem.g << g0, g1, g2, g3;
+  problem.c = c;
+  problem.terms = terms;
   return problem;
 }
 
@@ -395,12 +242,13 @@ PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source
 // The covariance is H^-1 (sum_z d2J/dz dx d2J/dz dx^T) sigma^2 H^-1: a source point is in one
 // pair, so its column is added at once; a target point's column gathers over its pairs.
 Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& source, const SE2& T,
-                                     const Workspace& ws, double range_sigma) {
+                                     Workspace& ws, double range_sigma) {
   const Eigen::Matrix2d R = T.rotation();
   const auto perpendicular = [](const Point2& v) { return Point2(-v.y(), v.x()); };
-  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
-  std::vector<Eigen::Vector3d> target_columns(t.points.size(), Eigen::Vector3d::Zero());
+  SymmetricSum3 hessian, spread_sum;
+  double curvature = 0.0;  // the e da/dx part of H(2, 2)
+  std::vector<Eigen::Vector3d>& target_columns = ws.target_columns;
+  std::fill(target_columns.begin(), target_columns.end(), Eigen::Vector3d::Zero());
   std::size_t pairs = 0;
   for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
     const SourcePair& s = ws.pairs[i];
@@ -410,7 +258,7 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     const Point2 d = t.points[s.j2] - q1;
     const double length = d.norm();
     if (!(length > 1e-12)) continue;
-    const Point2 along = d / length;
+    const Point2 along = d * (1.0 / length);
     const Point2 n = perpendicular(along);
     const Point2& p = source.points[i];
     const Point2 Rp = R * p;
@@ -419,21 +267,22 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     const double e = n.dot(offset);
     const double w2 = 2.0 * weight(source, i);
     const Eigen::Vector3d a(n.x(), n.y(), n.dot(dRp));
-    H += w2 * a * a.transpose();
-    H(2, 2) -= w2 * e * n.dot(Rp);
+    hessian.add(a, w2);
+    curvature -= w2 * e * n.dot(Rp);
     const auto column = [&](double de, const Point2& dn, double dn_theta) -> Eigen::Vector3d {
       return w2 * (de * a + e * Eigen::Vector3d(dn.x(), dn.y(), dn_theta));
     };
     const double range = p.norm();
-    const Point2 Ru = range > 1e-12 ? Point2(R * (p / range)) : Point2::Zero();
-    const Eigen::Vector3d source_column = column(n.dot(Ru), Point2::Zero(), n.dot(perpendicular(Ru)));
-    spread += source_column * source_column.transpose();
+    const Point2 Ru = range > 1e-12 ? Point2(Rp * (1.0 / range)) : Point2::Zero();
+    spread_sum.add(column(n.dot(Ru), Point2::Zero(), n.dot(perpendicular(Ru))));
     const double beta1 = n.dot(t.directions[s.j1]);
     const Point2 dn1 = (beta1 / length) * along;
     target_columns[s.j1] += column(beta1 * (along.dot(offset) / length - 1.0), dn1, dn1.dot(dRp));
     const Point2 dn2 = -(n.dot(t.directions[s.j2]) / length) * along;
     target_columns[s.j2] += column(dn2.dot(offset), dn2, dn2.dot(dRp));
   }
+  Eigen::Matrix3d H = hessian.matrix();
+  H(2, 2) += curvature;
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
   const double scale = H.diagonal().cwiseAbs().maxCoeff();
   if (pairs < 3 || ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(scale > 0.0) ||
@@ -441,8 +290,8 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     return Covariance3::Identity() * 1e6;
   }
   const Eigen::Matrix3d H_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
-  for (const Eigen::Vector3d& c : target_columns) spread += c * c.transpose();
-  spread *= range_sigma * range_sigma;
+  for (const Eigen::Vector3d& c : target_columns) spread_sum.add(c);
+  const Eigen::Matrix3d spread = spread_sum.matrix() * (range_sigma * range_sigma);
   const Covariance3 covariance = H_inverse * spread * H_inverse;
   if (!covariance.allFinite()) return Covariance3::Identity() * 1e6;
   return make_positive_definite(0.5 * (covariance + covariance.transpose()), 1e-18);
@@ -459,16 +308,20 @@ Point2 fitted_normal(const TargetIndex& t, int k, double max_gap) {
   while (lo > 0 && k - lo < kNormalHalfWindow && t.segment_lengths[lo - 1] <= max_gap) --lo;
   while (hi + 1 < t.size() && hi - k < kNormalHalfWindow && t.segment_lengths[hi] <= max_gap) ++hi;
   if (hi - lo < 2) return Point2::Zero();
-  Point2 mean = Point2::Zero();
-  for (int j = lo; j <= hi; ++j) mean += t.points[j];
-  mean /= static_cast<double>(hi - lo + 1);
-  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+  // One pass over the window, relative to point k (small numbers: no cancellation to fear).
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
   for (int j = lo; j <= hi; ++j) {
-    const Point2 v = t.points[j] - mean;
+    const Point2 v = t.points[j] - t.points[k];
+    sx += v.x();
+    sy += v.y();
     sxx += v.x() * v.x();
     sxy += v.x() * v.y();
     syy += v.y() * v.y();
   }
+  const double inverse_count = 1.0 / static_cast<double>(hi - lo + 1);
+  sxx -= sx * sx * inverse_count;
+  sxy -= sx * sy * inverse_count;
+  syy -= sy * sy * inverse_count;
   const double smallest = 0.5 * (sxx + syy) - std::sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy);
   const Point2 a(sxy, smallest - sxx), b(smallest - syy, sxy);
   const Point2 normal = a.squaredNorm() >= b.squaredNorm() ? a : b;
@@ -482,7 +335,7 @@ DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, co
   const DegeneracyConfig degeneracy{.range_sigma = config.range_sigma};
   const double inverse_variance = 1.0 / (config.range_sigma * config.range_sigma);
   const Eigen::Matrix2d R = T.rotation();
-  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  SymmetricSum3 information_sum;
   double squared_radius_sum = 0.0;
   std::size_t used = 0;
   for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
@@ -492,10 +345,11 @@ DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, co
     if (!(n.squaredNorm() > 0.5)) continue;  // no fitted normal (has_normal)
     const Point2 Rp = R * source.points[i];
     const Eigen::Vector3d a(n.x(), n.y(), n.dot(Point2(-Rp.y(), Rp.x())));
-    information += inverse_variance * a * a.transpose();
+    information_sum.add(a, inverse_variance);
     squared_radius_sum += source.points[i].squaredNorm();
     ++used;
   }
+  const Eigen::Matrix3d information = information_sum.matrix();
   if (used < 3) {
     DegeneracyAnalysis analysis;
     analysis.information = information;

@@ -24,8 +24,12 @@
 // scan up and down from the previous iteration's match (or from the bearing of p_i^w), skipping
 // runs of points with the jump tables (the next point farther / nearer from the sensor on either
 // side) and stopping each side with the bound |p| sin(delta bearing). It is exact: it finds the
-// same j1 as the kd-tree (see pl_icp.cpp for the bounds, a slight sharpening of CSM's). Bearings
-// are compared as pseudo-angles (monotone in the bearing, a half turn = 2), one division each.
+// same j1 as the kd-tree (see pl_icp_search.cpp for the bounds, a slight sharpening of CSM's).
+// Bearings are compared as pseudo-angles (monotone in the bearing, a half turn = 2), one division
+// each. Two exact shortcuts keep it cheap: a branch-free scan of a few points around the start,
+// kept when the same bounds rule out everything outside it, and a clearance certificate (every
+// other target point is at least c away from where the point was searched), which keeps j1
+// without any search while the point has drifted less than c - |p - p_j1| since.
 
 #include <cstddef>
 #include <optional>

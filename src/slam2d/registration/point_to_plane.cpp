@@ -49,6 +49,14 @@ MatchResult match_point_to_plane(const PointCloud2& target, const PointCloud2& s
   validate(config);
   if (target.size() < kMinPoints || source.size() < kMinPoints) return unmatched(T_target_source_guess);
   const KdTree2 tree(target.points);
+  return match_point_to_plane(tree, target, source, T_target_source_guess, config);
+}
+
+MatchResult match_point_to_plane(const KdTree2& tree, const PointCloud2& target, const PointCloud2& source,
+                                 const SE2& T_target_source_guess, const PointToPlaneConfig& config) {
+  validate(config);
+  if (target.size() < kMinPoints || source.size() < kMinPoints) return unmatched(T_target_source_guess);
+  check(tree.size() == target.size(), "point-to-plane: the kd-tree is not over the target's points");
   const PointCloud2 model = with_normals(
       target, tree,
       {config.normal_neighbors, config.normal_max_distance, config.normal_min_neighbors});  // the d_i with n_i

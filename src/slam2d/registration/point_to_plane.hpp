@@ -15,6 +15,8 @@
 
 namespace slam2d {
 
+class KdTree2;
+
 struct PointToPlaneConfig {
   int max_iterations = 30;                   // 1, >= 1; linear solves before giving up
   double max_correspondence_distance = 0.3;  // m, > 0; pairs farther apart are rejected (at 1 m surfaces one scan does not see pull the tests' pairs 2.4 cm off)
@@ -33,6 +35,9 @@ void validate(const PointToPlaneConfig& config);
 /// is Censi's closed form for the point-to-line metric (the pairs as Correspondence with
 /// target2 = kNoPoint, along the target normals); residual is the RMS point-to-line distance.
 MatchResult match_point_to_plane(const PointCloud2& target, const PointCloud2& source,
+                                 const SE2& T_target_source_guess, const PointToPlaneConfig& config = {});
+/// The same with a kd-tree already built over target.points (a map matched by many scans).
+MatchResult match_point_to_plane(const KdTree2& tree, const PointCloud2& target, const PointCloud2& source,
                                  const SE2& T_target_source_guess, const PointToPlaneConfig& config = {});
 
 }  // namespace slam2d

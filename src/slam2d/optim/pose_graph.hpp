@@ -1,0 +1,55 @@
+#pragma once
+// A 2D pose graph: nodes are robot poses T_world_node, edges are measured relative poses with
+// their information matrices (the constraints of graph SLAM; F. Lu, E. Milios, "Globally
+// consistent range scan alignment for environment mapping", Autonomous Robots 4, 1997).
+//
+// The error of an edge is the g2o / SPA convention
+//   e(X_i, X_j) = t2v(Z_ij^-1 (X_i^-1 X_j)),   chi2 = sum e^T Omega e,
+// with t2v(T) = (x, y, theta) of T (translation, not the SE2 log): the figures other solvers
+// report on the public benchmark graphs use it.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "slam2d/core/se2.hpp"
+#include "slam2d/io/pose_graph_io.hpp"
+
+namespace slam2d {
+
+struct PoseGraphEdge {
+  int from = 0;  // node index
+  int to = 0;    // node index
+  SE2 T_from_to;  // measured pose of `to` in the frame of `from`
+  Eigen::Matrix3d information = Eigen::Matrix3d::Identity();  // (x, y, theta), symmetric positive definite
+  bool robust = false;  // the back end's robust kernel applies (loop closures); odometry edges stay quadratic
+};
+
+struct PoseGraph {
+  std::vector<SE2> poses;            // T_world_node, by node index
+  std::vector<PoseGraphEdge> edges;
+  std::vector<bool> fixed;           // by node index; empty: node 0 is fixed (the gauge)
+
+  std::size_t size() const { return poses.size(); }
+  bool is_fixed(std::size_t node) const { return fixed.empty() ? node == 0 : fixed[node]; }
+};
+
+/// e = t2v(Z^-1 (X_from^-1 X_to)) and its analytic Jacobians with respect to the coordinates
+/// (x, y, theta) of X_from and X_to (either may be null).
+Eigen::Vector3d edge_error(const PoseGraphEdge& edge, const SE2& T_world_from, const SE2& T_world_to,
+                           Eigen::Matrix3d* J_from = nullptr, Eigen::Matrix3d* J_to = nullptr);
+
+/// sum e^T Omega e over all edges (no robust kernel).
+double chi2(const PoseGraph& graph);
+
+/// Node indices in file order; FIX lines fix their nodes (else the first node is fixed). A file
+/// with edges but no (or too few) vertices gets the missing initial poses by composing edges
+/// outward from the known ones (breadth first). Throws Error for an edge naming an unknown id that
+/// no edge connects, or a graph not connected to a fixed or known node.
+PoseGraph to_pose_graph(const PoseGraphFile& file);
+/// The file back, with the ids of `original` (same node order), the poses of `graph`.
+PoseGraphFile to_pose_graph_file(const PoseGraph& graph, const PoseGraphFile& original);
+/// A g2o file for a graph built in memory: vertex ids are node indices.
+PoseGraphFile to_pose_graph_file(const PoseGraph& graph);
+
+}  // namespace slam2d

@@ -1,0 +1,69 @@
+#pragma once
+// Sparse Pose Adjustment: K. Konolige, G. Grisetti, R. Kuemmerle, W. Burgard, B. Limketkai,
+// R. Vincent, "Efficient sparse pose adjustment for 2D mapping", IROS 2010.
+//
+// Levenberg-Marquardt over the pose graph (pose_graph.hpp): the analytic Jacobians of each edge
+// are summed straight into the sparse normal matrix H (3x3 blocks, upper triangle, compressed
+// column), the damped system (H + lambda diag(H)) dx = -b solved by sparse Cholesky (CHOLMOD,
+// supernodal, fill-reducing ordering analysed once per graph structure and reused), poses updated
+// by x <- x + dx on (x, y, theta) with the angle normalised. Fixed nodes are eliminated. Edges
+// marked robust enter with IRLS weights of the configured kernel on sqrt(e^T Omega e).
+//
+// Warm start: a SparsePoseAdjustment object keeps the symbolic factorisation while the node count
+// and edge pattern are unchanged (only extended graphs re-analyse) and the last damping, so the
+// optimisations after each loop closure of a SLAM run cost little.
+
+#include <cstddef>
+#include <memory>
+
+#include "slam2d/optim/pose_graph.hpp"
+#include "slam2d/optim/robust_kernel.hpp"
+
+namespace slam2d {
+
+struct SparsePoseAdjustmentConfig {
+  int max_iterations = 100;          // 1, >= 1: LM iterations (accepted plus rejected steps)
+  double initial_lambda = 1e-4;      // 1, > 0: damping of the first step, relative to diag(H)
+  double lambda_up = 10.0;           // 1, > 1: factor on a rejected step
+  double lambda_down = 0.1;          // 1, in (0, 1): factor on an accepted step
+  double relative_tolerance = 1e-9;  // 1, >= 0: converged when an accepted step lowers the cost by less than this fraction
+  double step_tolerance = 1e-10;     // m and rad, >= 0: converged when a step moves no coordinate by more than this
+  RobustKernel loop_kernel{};        // for edges with robust = true (kNone: plain least squares)
+};
+
+struct SparsePoseAdjustmentResult {
+  double initial_chi2 = 0.0;  // sum e^T Omega e before (no kernel)
+  double final_chi2 = 0.0;    // ... after
+  int iterations = 0;         // LM iterations run
+  bool converged = false;     // the relative tolerance was met before max_iterations
+  double seconds = 0.0;       // wall time of the optimisation
+};
+
+/// Throws Error for out-of-range values.
+void validate(const SparsePoseAdjustmentConfig& config);
+
+class SparsePoseAdjustment {
+ public:
+  explicit SparsePoseAdjustment(const SparsePoseAdjustmentConfig& config = {});
+  ~SparsePoseAdjustment();
+  SparsePoseAdjustment(SparsePoseAdjustment&&) noexcept;
+  SparsePoseAdjustment& operator=(SparsePoseAdjustment&&) noexcept;
+
+  /// Optimises graph.poses in place. Throws Error for an edge with an out-of-range node, a
+  /// non-finite pose or measurement, or an information matrix that is not symmetric positive
+  /// semi-definite.
+  SparsePoseAdjustmentResult optimize(PoseGraph& graph);
+
+  const SparsePoseAdjustmentConfig& config() const { return config_; }
+
+ private:
+  struct Solver;  // CHOLMOD state (common, symbolic factor, pattern)
+  SparsePoseAdjustmentConfig config_;
+  std::unique_ptr<Solver> solver_;
+  double lambda_ = 0.0;  // the damping the last optimisation ended with
+};
+
+/// One-shot optimisation (a fresh SparsePoseAdjustment).
+SparsePoseAdjustmentResult optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config = {});
+
+}  // namespace slam2d

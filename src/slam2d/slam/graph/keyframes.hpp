@@ -1,0 +1,47 @@
+#pragma once
+// Keyframes of graph SLAM: the scans that become graph nodes. A scan is taken when the robot
+// moved a minimum distance or turned a minimum angle since the last keyframe (Karto's minimum
+// travel distance and heading), or when a minimum time passed (the time-based subset of the 2015
+// indoor-localization study), so that a standing robot still contributes its best, undistorted
+// scans.
+
+#include <cstddef>
+#include <optional>
+
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct KeyframeConfig {
+  double min_distance = 0.2;  // m, >= 0
+  double min_angle = 0.2;     // rad, >= 0
+  double min_time = 10.0;     // s, >= 0; 0 disables the time rule
+};
+
+/// A graph node's scan: its end points in the robot frame, with normals (from the scan order).
+struct Keyframe {
+  std::size_t node = 0;        // index into the pose graph
+  std::size_t scan = 0;        // index of the scan among all scans added
+  double stamp = 0.0;          // s
+  PointCloud2 cloud;           // robot frame
+  double path_distance = 0.0;  // m travelled from the first keyframe (estimate at creation)
+};
+
+/// Throws Error for negative or non-finite values.
+void validate(const KeyframeConfig& config);
+
+class KeyframeSelector {
+ public:
+  explicit KeyframeSelector(const KeyframeConfig& config = {});
+  /// True when a scan at `T_map_robot` and `stamp` should become a keyframe (always for the first).
+  bool is_keyframe(const SE2& T_map_robot, double stamp) const;
+  void accept(const SE2& T_map_robot, double stamp);
+
+ private:
+  KeyframeConfig config_;
+  std::optional<SE2> last_pose_;
+  double last_stamp_ = 0.0;
+};
+
+}  // namespace slam2d

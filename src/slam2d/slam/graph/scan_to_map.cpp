@@ -1,0 +1,119 @@
+#include "slam2d/slam/graph/scan_to_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <unordered_set>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/registration/kd_tree.hpp"
+
+namespace slam2d {
+
+void validate(const MapMatchConfig& config) {
+  validate(config.correlative);
+  validate(config.refinement);
+  check(std::isfinite(config.max_refinement_shift) && config.max_refinement_shift >= 0.0,
+        "scan-to-map: max_refinement_shift must be >= 0");
+  check(std::isfinite(config.min_sigma_translation) && config.min_sigma_translation > 0.0,
+        "scan-to-map: min_sigma_translation must be > 0");
+  check(std::isfinite(config.min_sigma_rotation) && config.min_sigma_rotation > 0.0,
+        "scan-to-map: min_sigma_rotation must be > 0");
+  check(std::isfinite(config.inlier_distance) && config.inlier_distance > 0.0, "scan-to-map: inlier_distance must be > 0");
+  check(std::isfinite(config.map_voxel) && config.map_voxel >= 0.0, "scan-to-map: map_voxel must be >= 0");
+  check(config.min_score_at_window_edge >= 0.0 && config.min_score_at_window_edge <= 1.0,
+        "scan-to-map: min_score_at_window_edge must be in [0, 1]");
+}
+
+void validate(const ScanToMapConfig& config) {
+  validate(config.match);
+  check(config.buffer_size >= 1, "scan-to-map: buffer_size must be >= 1");
+  check(std::isfinite(config.buffer_distance) && config.buffer_distance > 0.0, "scan-to-map: buffer_distance must be > 0");
+  check(std::isfinite(config.map_radius) && config.map_radius > 0.0, "scan-to-map: map_radius must be > 0");
+}
+
+PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
+                      const Eigen::Vector2d& center, double radius, double voxel) {
+  PointCloud2 map;
+  const double radius_squared = radius * radius;
+  std::unordered_set<std::uint64_t> occupied;
+  const auto first_in_voxel = [&](const Eigen::Vector2d& point) {
+    if (voxel <= 0.0) return true;
+    const auto x = static_cast<std::int64_t>(std::floor(point.x() / voxel));
+    const auto y = static_cast<std::int64_t>(std::floor(point.y() / voxel));
+    return occupied.insert((static_cast<std::uint64_t>(x) << 32) ^ static_cast<std::uint32_t>(y)).second;
+  };
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const PointCloud2& cloud = keyframes[k]->cloud;
+    const SE2& T = T_map_keyframe[k];
+    const Eigen::Matrix2d R = T.rotation();
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Eigen::Vector2d point = T * cloud.points[i];
+      if ((point - center).squaredNorm() > radius_squared || !first_in_voxel(point)) continue;
+      map.points.push_back(point);
+      map.normals.push_back(R * cloud.normals[i]);
+    }
+  }
+  return map;
+}
+
+namespace {
+
+// Olson's covariance with a floor on each standard deviation: the lookup table is one cell wide
+// and the refinement's own estimate (Censi's) ignores the map's errors.
+Covariance3 floored(const Covariance3& covariance, const MapMatchConfig& config) {
+  Covariance3 result = 0.5 * (covariance + covariance.transpose());
+  const double floor_xy = config.min_sigma_translation * config.min_sigma_translation;
+  const double floor_theta = config.min_sigma_rotation * config.min_sigma_rotation;
+  result(0, 0) = std::max(result(0, 0), floor_xy);
+  result(1, 1) = std::max(result(1, 1), floor_xy);
+  result(2, 2) = std::max(result(2, 2), floor_theta);
+  return make_positive_definite(result, 1e-3 * std::min(floor_xy, floor_theta));
+}
+
+// The fraction of the scan's points within `distance` of a map point at the pose.
+double inlier_fraction(const KdTree2& map, const PointCloud2& scan, const SE2& T_map_robot, double distance) {
+  std::size_t inliers = 0;
+  for (const Point2& point : scan.points) {
+    const Neighbor nearest = map.nearest(T_map_robot * point);
+    if (nearest.index < map.size() && nearest.squared_distance <= distance * distance) ++inliers;
+  }
+  return static_cast<double>(inliers) / static_cast<double>(scan.size());
+}
+
+}  // namespace
+
+MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config) {
+  MatchMap map;
+  CorrelativeGridConfig grid_config = correlative_grid_config(config.correlative);
+  grid_config.margin = std::max(config.correlative.window_x, config.correlative.window_y);  // the fast path
+  if (!cloud.empty()) map.grid = CorrelativeGrid(cloud, grid_config);
+  map.cloud = std::move(cloud);
+  return map;
+}
+
+ScanToMapResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+                                  const MapMatchConfig& config) {
+  ScanToMapResult result;
+  result.T_map_robot = T_map_robot_guess;
+  if (map.cloud.size() < 3 || scan.size() < 3) return result;
+  const MatchResult coarse = match_correlative(map.grid, scan, T_map_robot_guess, config.correlative);
+  result.score = static_cast<double>(coarse.inliers) / static_cast<double>(scan.size());
+  if (!coarse.converged && result.score < config.min_score_at_window_edge) return result;
+  result.converged = true;
+  result.T_map_robot = coarse.T_target_source;
+  result.covariance = floored(coarse.covariance, config);
+  result.degenerate = coarse.degenerate;
+  if (!config.refine) return result;
+  const MatchResult fine = match_point_to_plane(map.grid.tree(), map.cloud, scan, coarse.T_target_source, config.refinement);
+  const SE2 shift = coarse.T_target_source.between(fine.T_target_source);
+  if (fine.converged && shift.translation().norm() <= config.max_refinement_shift &&
+      std::abs(shift.theta()) <= config.correlative.window_theta) {
+    result.T_map_robot = fine.T_target_source;
+    result.refined = true;
+  }
+  result.inlier_fraction = inlier_fraction(map.grid.tree(), scan, result.T_map_robot, config.inlier_distance);
+  return result;
+}
+
+}  // namespace slam2d

@@ -1,0 +1,86 @@
+#pragma once
+// Scan-to-map matching for graph SLAM's constraints (the "scan matcher" of Karto): the scan's end
+// points (robot frame) against a cloud of earlier keyframes' points in the map frame, rasterised
+// into a correlative lookup table (E. Olson, "Real-time correlative scan matching", ICRA 2009) and
+// searched by branch-and-bound over a window around the guess; the best pose is then refined by
+// point-to-line least squares against the same points (K.-L. Low 2004, registration/
+// point_to_plane.hpp). The covariance is Olson's, from the response over the window (Eq. (3)),
+// floored so that no constraint claims more than the sensor can give.
+//
+// The sequential constraint matches against the local map of the recent keyframes; loop closure
+// against a chain of old keyframes over a larger window (loop_closure.hpp). Both use MapMatchConfig.
+
+#include <cstddef>
+#include <vector>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/point_cloud.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/registration/correlative.hpp"
+#include "slam2d/registration/point_to_plane.hpp"
+#include "slam2d/slam/graph/keyframes.hpp"
+
+namespace slam2d {
+
+struct MapMatchConfig {
+  // Coarse is enough: the refinement does the fine work, the search only has to land in its basin.
+  CorrelativeConfig correlative{.resolution = 0.05, .sigma = 0.05, .window_x = 0.2, .window_y = 0.2,
+                                .window_theta = 0.2, .angular_step = 0.004, .min_score = 0.3};
+  bool refine = true;                     // point-to-line refinement of the correlative pose
+  PointToPlaneConfig refinement{.max_correspondence_distance = 0.15};
+  double max_refinement_shift = 0.1;      // m, >= 0: a refinement farther from the correlative pose is discarded
+  double min_sigma_translation = 0.005;   // m, > 0: floor of the constraint's standard deviations
+  double min_sigma_rotation = 0.002;      // rad, > 0
+  double inlier_distance = 0.1;           // m, > 0: a scan point this near a map point counts in inlier_fraction
+  double map_voxel = 0.02;                // m, >= 0: map points are thinned to one per voxel (0: all)
+  // A best pose on the window's edge (a corridor's axis, where the response is flat) is kept when
+  // this fraction of the scan lies on the map; its covariance then shows the flat direction.
+  double min_score_at_window_edge = 0.8;  // 1, in [0, 1]; 1 never keeps one
+};
+
+struct ScanToMapConfig {
+  MapMatchConfig match{};
+  int buffer_size = 10;          // 1, >= 1: the most recent keyframes in the local map
+  double buffer_distance = 10.0; // m, > 0: ... travelled at most this far before the new scan
+  double map_radius = 15.0;      // m, > 0: map points farther than this from the last keyframe are left out
+  // With odometry, the scans between keyframes are also refined against the local map (point-to-line
+  // from the odometry prediction, no search), so that each one's pose is measured, not only predicted.
+  bool track_every_scan = true;
+};
+
+struct ScanToMapResult {
+  SE2 T_map_robot;                                   // the estimate (the guess when not converged)
+  Covariance3 covariance = Covariance3::Identity() * 1e6;
+  bool converged = false;        // the correlative search found an inner maximum above min_score
+  bool refined = false;          // the refinement was applied
+  double score = 0.0;            // 1, in [0, 1]: fraction of the scan's points on the map (correlative inliers)
+  bool degenerate = false;
+  double inlier_fraction = 0.0;  // 1: scan points within inlier_distance of a map point at the estimate (converged only)
+};
+
+/// Throws Error for out-of-range values.
+void validate(const MapMatchConfig& config);
+void validate(const ScanToMapConfig& config);
+
+/// Map-frame points (and normals) of the keyframes, each at its pose, within `radius` of `center`,
+/// one per `voxel` x `voxel` cell (the first keyframe's first: the same wall seen from many
+/// keyframes is rasterised once). voxel = 0 keeps every point.
+PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
+                      const Eigen::Vector2d& center, double radius, double voxel);
+
+/// The map side of a match, built once and matched against many scans: the map-frame points
+/// (with normals) and their correlative lookup table.
+struct MatchMap {
+  PointCloud2 cloud;
+  CorrelativeGrid grid;
+};
+
+/// Rasterises the cloud with the config's table parameters (an empty cloud gives an empty map).
+MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config);
+
+/// Matches the robot-frame `scan` against the map from the guess. A map or scan of fewer than 3
+/// points gives converged = false and the guess.
+ScanToMapResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+                                  const MapMatchConfig& config);
+
+}  // namespace slam2d

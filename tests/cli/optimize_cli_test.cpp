@@ -1,0 +1,143 @@
+// slam2d optimize: a small inconsistent g2o loop optimised and written back (g2o, TORO, gzip), the
+// written poses scoring the reported chi2, edges-only input, and bad input giving "PATH:LINE:",
+// a non-zero exit and no output.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "slam2d/io/pose_graph_io.hpp"
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+using test::CommandResult;
+using test::TempDir;
+using test::json_number;
+using test::run_command;
+
+std::string slam2d(const std::string& arguments) { return "'" + test::cli_path() + "' " + arguments; }
+
+// A 2 m square in four 1 m sides whose odometry says 1.1 m, closed by a loop edge to the start.
+const char* const kSquare =
+    "VERTEX_SE2 0 0 0 0\n"
+    "VERTEX_SE2 1 1.1 0 1.5707963267948966\n"
+    "VERTEX_SE2 2 1.1 1.1 3.141592653589793\n"
+    "VERTEX_SE2 3 0 1.1 -1.5707963267948966\n"
+    "EDGE_SE2 0 1 1.1 0 1.5707963267948966 100 0 0 100 0 400\n"
+    "EDGE_SE2 1 2 1.1 0 1.5707963267948966 100 0 0 100 0 400\n"
+    "EDGE_SE2 2 3 1.1 0 1.5707963267948966 100 0 0 100 0 400\n"
+    "EDGE_SE2 3 0 1.1 0 1.5707963267948966 100 0 0 100 0 400\n"
+    "EDGE_SE2 0 2 1 1 3.141592653589793 1000 0 0 1000 0 1000\n";
+
+std::string write_file(const TempDir& dir, const std::string& name, const std::string& text) {
+  const std::string path = dir.file(name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(OptimizeCli, OptimisesAndWritesTheGraphBack) {
+  TempDir dir;
+  const std::string input = write_file(dir, "square.g2o", kSquare);
+  const std::string out = dir.file("out/square_opt.g2o");
+  const CommandResult result = run_command(slam2d("optimize --json " + input + " --out " + out));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_EQ(json_number(result.output, "nodes"), 4.0);
+  EXPECT_EQ(json_number(result.output, "edges"), 5.0);
+  const double initial = json_number(result.output, "initial_chi2").value_or(-1.0);
+  const double final_chi2 = json_number(result.output, "final_chi2").value_or(-1.0);
+  EXPECT_GT(initial, 10.0);  // the diagonal disagrees with the square's sides
+  EXPECT_GT(final_chi2, 0.0);
+  EXPECT_LT(final_chi2, 0.5 * initial);
+  EXPECT_GT(json_number(result.output, "iterations").value_or(0.0), 0.0);
+  for (const char* key : {"cpu_s", "wall_s"}) EXPECT_GE(json_number(result.output, key).value_or(-1.0), 0.0) << key;
+  EXPECT_NE(result.output.find("\"converged\": true"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("\"format\": \"g2o\""), std::string::npos) << result.output;
+
+  const PoseGraphFile written = read_pose_graph(out);
+  EXPECT_EQ(written.format, PoseGraphFormat::kG2o);
+  ASSERT_EQ(written.vertices.size(), 4u);
+  EXPECT_EQ(written.edges.size(), 5u);
+  EXPECT_EQ(written.vertices[0].pose.vector(), Eigen::Vector3d::Zero());  // node 0 is the gauge
+
+  // The written poses score the reported chi2 (numbers are written exactly), and are optimal.
+  const CommandResult again = run_command(slam2d("optimize --json " + out + " --out " + dir.file("again.g2o")));
+  ASSERT_EQ(again.exit_code, 0) << again.errors;
+  EXPECT_EQ(json_number(again.output, "initial_chi2"), final_chi2);
+  EXPECT_NEAR(json_number(again.output, "final_chi2").value_or(-1.0), final_chi2, 1e-9 * final_chi2);
+}
+
+TEST(OptimizeCli, OutputFormatFollowsTheExtension) {
+  TempDir dir;
+  const std::string input = write_file(dir, "square.g2o", kSquare);
+  const CommandResult toro = run_command(slam2d("optimize --quiet " + input + " --out " + dir.file("square.graph")));
+  ASSERT_EQ(toro.exit_code, 0) << toro.errors;
+  EXPECT_NE(toro.output.find("final_chi2"), std::string::npos) << toro.output;  // the text summary
+  const PoseGraphFile toro_file = read_pose_graph(dir.file("square.graph"));
+  EXPECT_EQ(toro_file.format, PoseGraphFormat::kToro);
+  EXPECT_EQ(toro_file.vertices.size(), 4u);
+
+  // Compressed output, read back as input (TORO in, g2o out).
+  const CommandResult gz = run_command(slam2d("optimize --json " + dir.file("square.graph") + " --out " + dir.file("square.g2o.gz")));
+  ASSERT_EQ(gz.exit_code, 0) << gz.errors;
+  EXPECT_NE(gz.output.find("\"format\": \"toro\""), std::string::npos) << gz.output;
+  EXPECT_EQ(read_pose_graph(dir.file("square.g2o.gz")).format, PoseGraphFormat::kG2o);
+}
+
+TEST(OptimizeCli, EdgesOnlyInputGetsVertices) {
+  TempDir dir;
+  std::string edges_only;
+  std::istringstream lines(kSquare);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("EDGE_SE2", 0) == 0) edges_only += line + "\n";
+  }
+  const std::string input = write_file(dir, "edges.g2o", edges_only);
+  const CommandResult result = run_command(slam2d("optimize --json " + input + " --out " + dir.file("out.g2o")));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_EQ(json_number(result.output, "nodes"), 4.0);
+  EXPECT_EQ(read_pose_graph(dir.file("out.g2o")).vertices.size(), 4u);
+}
+
+TEST(OptimizeCli, BadInputFailsWithoutOutput) {
+  TempDir dir;
+  struct Case {
+    std::string file;
+    std::string text;
+    std::string prefix;  // expected start of stderr
+  };
+  const std::string truncated = dir.file("truncated.g2o");
+  const std::string bad_number = dir.file("bad_number.g2o");
+  const std::string island = dir.file("island.g2o");
+  const Case cases[] = {
+      {truncated, "VERTEX_SE2 0 0 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1\n", truncated + ":2: "},
+      {bad_number, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 x 0 0\n", bad_number + ":2: "},
+      {island, "VERTEX_SE2 0 0 0 0\nEDGE_SE2 5 6 1 0 0 1 0 0 1 0 1\n", "pose graph: "},
+  };
+  for (const Case& bad : cases) {
+    write_file(dir, std::filesystem::path(bad.file).filename().string(), bad.text);
+    const std::string out = dir.file("out.g2o");
+    const CommandResult result = run_command(slam2d("optimize " + bad.file + " --out " + out));
+    EXPECT_NE(result.exit_code, 0) << bad.file;
+    EXPECT_EQ(result.errors.rfind(bad.prefix, 0), 0u) << result.errors;
+    EXPECT_EQ(std::count(result.errors.begin(), result.errors.end(), '\n'), 1) << result.errors;
+    EXPECT_FALSE(std::filesystem::exists(out)) << bad.file;
+  }
+  const std::string good = write_file(dir, "square.g2o", kSquare);
+  const CommandResult missing = run_command(slam2d("optimize " + dir.file("missing.g2o") + " --out " + dir.file("out.g2o")));
+  EXPECT_NE(missing.exit_code, 0);
+  const CommandResult extension = run_command(slam2d("optimize " + good + " --out " + dir.file("out.txt")));
+  EXPECT_NE(extension.exit_code, 0);
+  EXPECT_NE(extension.errors.find(".g2o"), std::string::npos) << extension.errors;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.txt")));
+  const CommandResult iterations = run_command(slam2d("optimize " + good + " --max-iterations 0 --out " + dir.file("out.g2o")));
+  EXPECT_NE(iterations.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.g2o")));
+}
+
+}  // namespace
+}  // namespace slam2d

@@ -1,0 +1,157 @@
+// Graph SLAM on the simulated office: keyframe rules and chains against hand cases, the loop of
+// the office run closed and the trajectory recovered within stated bounds (with and without
+// odometry, with delayed closure), a false loop edge absorbed by the robust kernel, determinism.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <variant>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/eval/ate.hpp"
+#include "slam2d/sim/simulator.hpp"
+#include "slam2d/slam/graph/graph_slam.hpp"
+
+namespace slam2d {
+namespace {
+
+const SimulatedRun& office_run() {
+  static const SimulatedRun run = [] {
+    SimulationConfig config;
+    config.duration = 240.0;
+    config.seed = 7;
+    return simulate(config);
+  }();
+  return run;
+}
+
+std::vector<const LaserMessage*> lasers(const SimulatedRun& run) {
+  std::vector<const LaserMessage*> out;
+  for (const CarmenMessage& m : run.messages) {
+    if (const auto* laser = std::get_if<LaserMessage>(&m)) out.push_back(laser);
+  }
+  return out;
+}
+
+GraphSlam run_graph_slam(const GraphSlamConfig& config, bool use_odometry) {
+  GraphSlam slam(config);
+  for (const LaserMessage* laser : lasers(office_run())) {
+    slam.add_scan(laser->scan, use_odometry ? std::optional<SE2>(laser->odom_pose) : std::nullopt);
+  }
+  slam.finish();
+  return slam;
+}
+
+Trajectory odometry_of(const SimulatedRun& run) {
+  Trajectory odometry;
+  for (const LaserMessage* laser : lasers(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
+  return odometry;
+}
+
+TEST(KeyframeSelector, TakesDistanceAngleAndTime) {
+  KeyframeSelector selector({.min_distance = 0.2, .min_angle = 0.2, .min_time = 5.0});
+  EXPECT_TRUE(selector.is_keyframe(SE2(), 0.0));  // the first scan
+  selector.accept(SE2(1.0, 1.0, 0.5), 10.0);
+  EXPECT_FALSE(selector.is_keyframe(SE2(1.1, 1.1, 0.6), 11.0));   // 0.14 m, 0.1 rad, 1 s
+  EXPECT_TRUE(selector.is_keyframe(SE2(1.15, 1.15, 0.5), 11.0));  // 0.21 m
+  EXPECT_TRUE(selector.is_keyframe(SE2(1.0, 1.0, 0.71), 11.0));   // 0.21 rad
+  EXPECT_TRUE(selector.is_keyframe(SE2(1.0, 1.0, 0.5), 15.0));    // 5 s standing still
+  EXPECT_THROW(KeyframeSelector({.min_distance = -1.0}), Error);
+}
+
+TEST(LoopChains, GroupsConsecutiveCandidates) {
+  const std::vector<std::size_t> candidates{2, 3, 4, 7, 8, 10, 11, 12, 13};
+  using Chains = std::vector<std::pair<std::size_t, std::size_t>>;
+  EXPECT_EQ(group_into_chains(candidates, 3), (Chains{{2, 5}, {10, 14}}));
+  EXPECT_EQ(group_into_chains(candidates, 1), (Chains{{2, 5}, {7, 9}, {10, 14}}));
+  EXPECT_TRUE(group_into_chains({}, 1).empty());
+}
+
+struct OfficeCase {
+  const char* name;
+  bool odometry;
+  bool delayed;
+  double max_ate_rmse;  // m
+};
+void PrintTo(const OfficeCase& c, std::ostream* os) { *os << c.name; }
+
+class GraphSlamOffice : public ::testing::TestWithParam<OfficeCase> {};
+
+TEST_P(GraphSlamOffice, ClosesTheLoopAndRecoversTheTrajectory) {
+  GraphSlamConfig config;
+  config.loop_closure.delayed = GetParam().delayed;
+  const GraphSlam slam = run_graph_slam(config, GetParam().odometry);
+  const SimulatedRun& run = office_run();
+  const Trajectory trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), run.truth.size());
+  EXPECT_GT(slam.stats().loop_closures, 0u);
+  EXPECT_GT(slam.stats().keyframes, 50u);
+  EXPECT_EQ(slam.graph().size(), slam.stats().keyframes);
+  const AteResult ate = absolute_trajectory_error(trajectory, run.truth);
+  const AteResult odometry_ate = absolute_trajectory_error(odometry_of(run), run.truth);
+  EXPECT_LT(ate.rmse, GetParam().max_ate_rmse) << "max " << ate.max;
+  EXPECT_LT(ate.rmse, 0.2 * odometry_ate.rmse);
+  double worst_heading = 0.0;
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const SE2 aligned = ate.T_reference_estimate * trajectory[i].pose;
+    worst_heading = std::max(worst_heading, std::abs(angle_difference(aligned.theta(), run.truth[i].pose.theta())));
+  }
+  EXPECT_LT(worst_heading, 0.02);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, GraphSlamOffice,
+                         ::testing::Values(OfficeCase{"odometry", true, false, 0.05},
+                                           OfficeCase{"no_odometry", false, false, 0.05},
+                                           OfficeCase{"delayed", true, true, 0.05}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(GraphSlam, RobustKernelAbsorbsAFalseLoopEdge) {
+  const GraphSlam slam = run_graph_slam({}, true);
+  PoseGraph graph = slam.graph();
+  const SimulatedRun& run = office_run();
+  // The last keyframe claimed to sit 3 m and 90 degrees off the first one, very confidently.
+  PoseGraphEdge wrong;
+  wrong.from = 0;
+  wrong.to = static_cast<int>(graph.size() - 1);
+  wrong.T_from_to = graph.poses.front().between(graph.poses.back()) * SE2(3.0, 0.0, std::numbers::pi / 2);
+  wrong.information = Eigen::Matrix3d::Identity() * 1e4;
+  wrong.robust = true;
+  graph.edges.push_back(wrong);
+  PoseGraph plain = graph;
+  plain.edges.back().robust = false;
+  SparsePoseAdjustment(slam.config().back_end).optimize(graph);
+  SparsePoseAdjustment(SparsePoseAdjustmentConfig{}).optimize(plain);
+  const auto keyframe_error = [&](const PoseGraph& g) {
+    Trajectory estimate, truth;
+    for (const Keyframe& keyframe : slam.keyframes()) {
+      estimate.push_back(keyframe.stamp, g.poses[keyframe.node]);
+      truth.push_back(keyframe.stamp, run.truth[keyframe.scan].pose);
+    }
+    return absolute_trajectory_error(estimate, truth).rmse;
+  };
+  EXPECT_LT(keyframe_error(graph), 0.05);
+  EXPECT_GT(keyframe_error(plain), 0.3);  // without the kernel the false edge bends the map
+}
+
+TEST(GraphSlam, IsDeterministic) {
+  GraphSlamConfig config;
+  const GraphSlam a = run_graph_slam(config, true);
+  const GraphSlam b = run_graph_slam(config, true);
+  ASSERT_EQ(a.trajectory().size(), b.trajectory().size());
+  for (std::size_t i = 0; i < a.trajectory().size(); ++i) EXPECT_EQ(a.trajectory()[i].pose, b.trajectory()[i].pose);
+}
+
+TEST(GraphSlam, RejectsBadConfiguration) {
+  EXPECT_THROW(GraphSlam({.max_range = 0.0}), Error);
+  GraphSlamConfig config;
+  config.loop_closure.min_chain_size = 0;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.sequential.buffer_size = 0;
+  EXPECT_THROW(GraphSlam{config}, Error);
+}
+
+}  // namespace
+}  // namespace slam2d
