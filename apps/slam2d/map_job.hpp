@@ -14,9 +14,9 @@ namespace slam2d::cli {
 struct MapJobOptions {
   std::string log;                  // CARMEN log, plain or .gz
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
-  std::string method = "odometry";  // odometry, hector
+  std::string method = "odometry";  // odometry, hector, graph
   double resolution = 0.05;         // m per cell
-  bool no_odometry = false;         // hector: ignore the log's odometry (the last pose is the initial guess)
+  bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
   int levels = 3;                   // hector: map pyramid levels, in [1, 16]
   bool quiet = false;               // no progress line
   std::optional<double> range_max;  // m; FLASER/RLASER readings at or above are no-return (default: PARAM, else 80)

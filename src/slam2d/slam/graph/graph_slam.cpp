@@ -119,7 +119,8 @@ void GraphSlam::rebuild_local_map() {
     poses.push_back(graph_.poses[keyframes_[k].node]);
   }
   const Eigen::Vector2d center = graph_.poses[keyframes_.back().node].translation();
-  local_map_ = make_match_map(map_cloud(members, poses, center, config_.sequential.map_radius, config_.sequential.match.map_voxel), config_.sequential.match);
+  const MapMatchConfig& match = config_.sequential.match;
+  local_map_ = make_match_map(map_cloud(members, poses, center, config_.sequential.map_radius, match.map_voxel), match);
 }
 
 GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
