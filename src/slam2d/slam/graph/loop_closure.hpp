@@ -50,8 +50,11 @@ struct LoopClosureConfig {
   bool reject_degenerate = true;           // the scene's Fisher information must constrain every direction
   double map_radius = 15.0;          // m, > 0: chain points this far beyond the search window from the estimate are left out
   bool delayed = false;              // delayed loop closure
+  // The large window: +-4 m, +-0.35 rad. A +-90 deg window costs about 4x more (branch-and-bound
+  // keeps it affordable) but on FR079 it lets symmetric rooms in: 0.087 m mean relation error
+  // against 0.065 m.
   MapMatchConfig match{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 4.0, .window_y = 4.0,
-                                       .window_theta = 1.5707963267948966, .angular_step = 0.006, .min_score = 0.5},
+                                       .window_theta = 0.35, .angular_step = 0.006, .min_score = 0.5},
                        .refinement = {.max_correspondence_distance = 0.3},
                        .max_refinement_shift = 0.3,
                        .min_sigma_translation = 0.01,
