@@ -19,7 +19,7 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return "'" + test::cli_path() + "' " + arguments; }
+std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
 
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path);

@@ -14,6 +14,7 @@
 #include "slam2d/core/rng.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/optim/pose_graph.hpp"
+#include "optim/pose_graph_fixture.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -21,16 +22,7 @@ namespace {
 
 using test::TempDir;
 
-PoseGraphEdge make_edge(int from, int to, const SE2& T_from_to = SE2(),
-                        const Eigen::Matrix3d& information = Eigen::Matrix3d::Identity(), bool robust = false) {
-  PoseGraphEdge edge;
-  edge.from = from;
-  edge.to = to;
-  edge.T_from_to = T_from_to;
-  edge.information = information;
-  edge.robust = robust;
-  return edge;
-}
+using test::make_edge;
 
 SE2 random_pose(Rng& rng, double extent = 5.0) {
   return SE2(rng.uniform(-extent, extent), rng.uniform(-extent, extent), rng.uniform(-std::numbers::pi, std::numbers::pi));

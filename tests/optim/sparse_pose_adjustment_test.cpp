@@ -21,6 +21,7 @@
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/optim/sparse_pose_adjustment.hpp"
+#include "optim/pose_graph_fixture.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -32,16 +33,7 @@ SparsePoseAdjustmentConfig config_with(void (*change)(SparsePoseAdjustmentConfig
   return config;
 }
 
-PoseGraphEdge make_edge(int from, int to, const SE2& T_from_to = SE2(),
-                        const Eigen::Matrix3d& information = Eigen::Matrix3d::Identity(), bool robust = false) {
-  PoseGraphEdge edge;
-  edge.from = from;
-  edge.to = to;
-  edge.T_from_to = T_from_to;
-  edge.information = information;
-  edge.robust = robust;
-  return edge;
-}
+using test::make_edge;
 
 Eigen::Matrix3d diagonal_information(double translation_sigma, double angle_sigma) {
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();

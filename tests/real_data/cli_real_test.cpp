@@ -16,7 +16,7 @@ using test::CommandResult;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return "'" + test::cli_path() + "' " + arguments; }
+std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
 
 TEST(RealDataCli, InfoOnIntel) {
   SLAM2D_REQUIRE_REAL_DATA(data);

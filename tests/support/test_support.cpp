@@ -65,6 +65,8 @@ std::string cli_path() {
   return bin.empty() ? "slam2d" : bin;
 }
 
+std::string cli_command(const std::string& arguments) { return "'" + cli_path() + "' " + arguments; }
+
 CommandResult run_command(const std::string& command) {
   TempDir dir;
   const auto out = dir.path() / "stdout";

@@ -35,6 +35,8 @@ bool real_data_required();
 
 /// The path of the slam2d command-line tool (from $SLAM2D_BIN).
 std::string cli_path();
+/// A shell command running the slam2d tool with `arguments`.
+std::string cli_command(const std::string& arguments);
 
 /// Runs a shell command, returns its exit status; stdout and stderr are captured.
 struct CommandResult {

@@ -180,6 +180,14 @@ SimulatedRun simulate(const SimulationConfig& config, const World& world) {
   return Simulation(config, world).run();
 }
 
+std::vector<const LaserMessage*> laser_messages(const SimulatedRun& run) {
+  std::vector<const LaserMessage*> lasers;
+  for (const CarmenMessage& message : run.messages) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) lasers.push_back(laser);
+  }
+  return lasers;
+}
+
 void write_run(const SimulatedRun& run, const std::string& log_path, const std::string& truth_path) {
   CarmenWriter writer(log_path);
   const SimulationConfig& config = run.config;

@@ -54,6 +54,9 @@ SimulatedRun simulate(const SimulationConfig& config);
 /// Runs the simulation in a given world (its route must have >= 2 distinct points).
 SimulatedRun simulate(const SimulationConfig& config, const World& world);
 
+/// The run's laser messages, in order (pointers into run.messages).
+std::vector<const LaserMessage*> laser_messages(const SimulatedRun& run);
+
 /// Writes the CARMEN log (atomic; gzip when the path ends in .gz): comments, the PARAM lines of the
 /// laser geometry (field of view, resolution, maximum range, mounting offsets), then every message.
 /// If `truth_path` is not empty, also writes the true trajectory there (write_trajectory format).

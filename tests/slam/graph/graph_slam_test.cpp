@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <variant>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -27,17 +26,9 @@ const SimulatedRun& office_run() {
   return run;
 }
 
-std::vector<const LaserMessage*> lasers(const SimulatedRun& run) {
-  std::vector<const LaserMessage*> out;
-  for (const CarmenMessage& m : run.messages) {
-    if (const auto* laser = std::get_if<LaserMessage>(&m)) out.push_back(laser);
-  }
-  return out;
-}
-
 GraphSlam run_graph_slam(const GraphSlamConfig& config, bool use_odometry) {
   GraphSlam slam(config);
-  for (const LaserMessage* laser : lasers(office_run())) {
+  for (const LaserMessage* laser : laser_messages(office_run())) {
     slam.add_scan(laser->scan, use_odometry ? std::optional<SE2>(laser->odom_pose) : std::nullopt);
   }
   slam.finish();
@@ -46,7 +37,7 @@ GraphSlam run_graph_slam(const GraphSlamConfig& config, bool use_odometry) {
 
 Trajectory odometry_of(const SimulatedRun& run) {
   Trajectory odometry;
-  for (const LaserMessage* laser : lasers(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
+  for (const LaserMessage* laser : laser_messages(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
   return odometry;
 }
 

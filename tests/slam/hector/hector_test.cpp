@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <variant>
 #include <vector>
 
 #include "slam2d/core/angles.hpp"
@@ -35,17 +34,9 @@ const SimulatedRun& office_run() {
   return run;
 }
 
-std::vector<const LaserMessage*> lasers(const SimulatedRun& run) {
-  std::vector<const LaserMessage*> out;
-  for (const CarmenMessage& m : run.messages) {
-    if (const auto* laser = std::get_if<LaserMessage>(&m)) out.push_back(laser);
-  }
-  return out;
-}
-
 TEST(HectorMatcher, RecoversKnownOffsetsOnTheOfficeMap) {
   const SimulatedRun& run = office_run();
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   MapPyramid map({.levels = 3, .grid = {.resolution = 0.05, .probability_hit = 0.9, .max_range = 20.0}});
   for (std::size_t i = 0; i < 200; i += 5) map.integrate_scan(scans[i]->scan, run.truth[i].pose);
   const SE2 offsets[] = {SE2(0.15, -0.10, 0.08), SE2(-0.2, 0.05, -0.1), SE2(0.0, 0.2, 0.15), SE2(0.1, 0.1, -0.05)};
@@ -82,7 +73,7 @@ TEST(HectorMatcher, ScanAgainstAnEmptyMapHasAnUnconstrainedCovariance) {
 
 TEST(HectorMatcher, LinearizationMatchesFiniteDifferencesOfTheCost) {
   const SimulatedRun& run = office_run();
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   OccupancyGrid grid({.resolution = 0.05, .probability_hit = 0.9, .max_range = 20.0});
   for (std::size_t i = 0; i < 50; i += 5) grid.integrate_scan(scans[i]->scan, run.truth[i].pose);
   const auto points = usable_end_points(scans[20]->scan, 0.1, 20.0);
@@ -102,7 +93,7 @@ TEST(HectorMatcher, LinearizationMatchesFiniteDifferencesOfTheCost) {
 
 TEST(HectorMatcher, CovarianceIsTheScaledInverseHessian) {
   const SimulatedRun& run = office_run();
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   MapPyramid map({.levels = 2, .grid = {.resolution = 0.05, .probability_hit = 0.9, .max_range = 20.0}});
   for (std::size_t i = 0; i < 100; i += 5) map.integrate_scan(scans[i]->scan, run.truth[i].pose);
   const auto points = usable_end_points(scans[52]->scan, 0.1, 20.0);
@@ -127,7 +118,7 @@ class HectorSlamOffice : public ::testing::TestWithParam<SlamCase> {};
 
 TEST_P(HectorSlamOffice, RecoversTheTrueTrajectory) {
   const SimulatedRun& run = office_run();
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   HectorSlamConfig config;
   config.prior = GetParam().prior;
   HectorSlam slam(config);
@@ -179,7 +170,7 @@ TEST(HectorSlam, RecoversFromATurnDuringAGapWithoutOdometry) {
   // Drop the scans of the window (about 3 s) in which the robot turns the most: the heading jumps
   // by far more than the 0.4 rad search, as in a gap of a real log.
   const SimulatedRun& run = office_run();
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   const std::size_t gap = 30;
   std::size_t start = 0;
   double largest_turn = 0.0;
@@ -212,7 +203,7 @@ TEST(HectorSlam, RecoversFromATurnDuringAGapWithoutOdometry) {
 }
 
 TEST(HectorSlam, IsDeterministic) {
-  const auto scans = lasers(office_run());
+  const auto scans = laser_messages(office_run());
   HectorSlam a, b;
   for (std::size_t i = 0; i < 300; ++i) {
     a.add_scan(scans[i]->scan, {.T_odom_robot = scans[i]->odom_pose});
@@ -228,7 +219,7 @@ TEST(HectorSlam, RejectsBadConfigurationAndMissingOdometry) {
   EXPECT_THROW(HectorSlam({.rotation_margin_without_odometry = 1.0}), Error);
   EXPECT_THROW(HectorSlam({.recovery_residual = -0.1}), Error);
   HectorSlam slam;  // odometry prior by default
-  EXPECT_THROW(slam.add_scan(lasers(office_run())[0]->scan, {}), Error);
+  EXPECT_THROW(slam.add_scan(laser_messages(office_run())[0]->scan, {}), Error);
 }
 
 // A laser pitched and rolled in front of a vertical wall x = d: the raw end points fall short of or
@@ -319,7 +310,7 @@ TEST(HectorSlam, DistortionCorrectionInTheLoopImprovesAFastTurningRun) {
   sim.max_turn_rate = 2.5;
   sim.laser.sweep_duration = 0.08;
   const SimulatedRun run = simulate(sim);
-  const auto scans = lasers(run);
+  const auto scans = laser_messages(run);
   double rmse[2];
   for (int correct = 0; correct < 2; ++correct) {
     HectorSlam slam({.sweep_duration = correct ? sim.laser.sweep_duration : 0.0});

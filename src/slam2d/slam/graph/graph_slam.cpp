@@ -96,9 +96,8 @@ ScanToMapResult GraphSlam::match_local_map(const PointCloud2& cloud, const SE2& 
 }
 
 // A scan between keyframes: the odometry prediction refined against the local map.
-SE2 GraphSlam::track(const LaserScan& scan, const SE2& prediction) {
+SE2 GraphSlam::track(const PointCloud2& cloud, const SE2& prediction) {
   const MatchMap& map = local_map();
-  const PointCloud2 cloud = scan_cloud(scan);
   if (map.cloud.size() < 3 || cloud.size() < 3) return prediction;
   const MapMatchConfig& config = config_.sequential.match;
   const MatchResult fine = match_point_to_plane(map.grid.tree(), map.cloud, cloud, prediction, config.refinement);
@@ -128,16 +127,15 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
   const SE2 previous = current_pose();
   const SE2 prediction = predict(scan, T_odom_robot);
   const bool first = keyframes_.empty();
-  PointCloud2 cloud;
+  PointCloud2 cloud = scan_cloud(scan);
   ScanToMapResult match;
   // With odometry the prediction may be refined (tracking); a scan that is then a keyframe
   // candidate is matched with the search. Without odometry every scan is searched: its match is
   // the only measure of where it is.
   SE2 guess = prediction;
-  if (!first && T_odom_robot && config_.sequential.track_every_scan) guess = track(scan, prediction);
+  if (!first && T_odom_robot && config_.sequential.track_every_scan) guess = track(cloud, prediction);
   match.T_map_robot = guess;
   if (!first && (!T_odom_robot || selector_.is_keyframe(guess, scan.stamp))) {
-    cloud = scan_cloud(scan);
     match = match_local_map(cloud, guess);
     if (!match.converged) match.T_map_robot = guess;
     if (match.converged && T_odom_robot) {
@@ -147,7 +145,6 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
   }
   const SE2 estimate = match.T_map_robot;
   if (first || selector_.is_keyframe(estimate, scan.stamp)) {
-    if (first) cloud = scan_cloud(scan);
     add_keyframe(scan, std::move(cloud), guess, match);
     step.keyframe = true;
     step.matched = match.converged;

@@ -119,7 +119,7 @@ class GraphSlam {
   SE2 predict(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) const;
   PointCloud2 scan_cloud(const LaserScan& scan) const;
   ScanToMapResult match_local_map(const PointCloud2& cloud, const SE2& guess);
-  SE2 track(const LaserScan& scan, const SE2& prediction);
+  SE2 track(const PointCloud2& cloud, const SE2& prediction);
   const MatchMap& local_map();
   void add_keyframe(const LaserScan& scan, PointCloud2 cloud, const SE2& prediction, const ScanToMapResult& match);
   int close_loops();
