@@ -372,14 +372,24 @@ double rms_point_to_line(const PointCloud2& source, const Workspace& ws) {
   return weights > 0.0 ? std::sqrt(sum / weights) : 0.0;
 }
 
-// The result at the estimate: the association there (`associated_at_T`: the workspace holds it
-// already), its covariance (Censi 2007), RMS residual and degeneracy.
+// Moves the source points of the kept pairs to T and measures their distances to their lines
+// again, keeping the association.
+void move_pairs(const TargetIndex& t, const PointCloud2& source, const SE2& T, Workspace& ws) {
+  const Eigen::Matrix2d R = T.rotation();
+  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+    SourcePair& s = ws.pairs[i];
+    if (!s.paired()) continue;
+    s.moved = R * source.points[i] + T.translation();
+    s.distance = std::abs(s.normal.dot(s.moved - t.points[s.j1]));
+  }
+}
+
+// The result at the estimate T: its covariance (Censi 2007), RMS residual and degeneracy, from
+// the last association (CSM's too): the one found at T itself when the loop stopped on a repeated
+// association, else the one that gave the last step, with the points moved to T.
 MatchResult finish(const PointCloud2& source, const TargetIndex& t, const SE2& T, bool converged,
                    bool associated_at_T, int iterations, const PlIcpConfig& config, Workspace& ws) {
-  if (!associated_at_T) {
-    find_correspondences(t, source, T, config, ws);
-    reject_outliers(t, config, ws);
-  }
+  if (!associated_at_T) move_pairs(t, source, T, ws);
   const auto inliers = static_cast<std::size_t>(
       std::count_if(ws.pairs.begin(), ws.pairs.end(), [](const SourcePair& s) { return s.paired(); }));
   MatchResult result;

@@ -140,7 +140,10 @@ TEST(GraphSlam, RejectsBadConfiguration) {
   config.loop_closure.min_chain_size = 0;
   EXPECT_THROW(GraphSlam{config}, Error);
   config = {};
-  config.sequential.buffer_size = 0;
+  config.sequential_sigma_translation = 0.0;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.tracking.max_range = -1.0;
   EXPECT_THROW(GraphSlam{config}, Error);
 }
 

@@ -1,58 +1,36 @@
 #include "slam2d/slam/graph/graph_slam.hpp"
 
-#include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
-#include "slam2d/registration/kd_tree.hpp"
 #include "slam2d/registration/normals.hpp"
 #include "slam2d/slam/hector/scan_preprocessing.hpp"
 
 namespace slam2d {
+
+HectorSlamConfig default_tracking_config() {
+  HectorSlamConfig config;
+  config.prior_information_translation = 100.0;  // 1/m^2: sigma 0.1 m
+  config.prior_information_rotation = 300.0;     // 1/rad^2: sigma 0.058 rad
+  return config;
+}
 
 void validate(const GraphSlamConfig& config) {
   check(std::isfinite(config.min_range) && config.min_range >= 0.0, "graph slam: min_range must be >= 0");
   check(std::isfinite(config.max_range) && config.max_range > config.min_range,
         "graph slam: max_range must be > min_range");
   validate(config.keyframes);
-  validate(config.sequential);
+  validate(config.tracking);
+  check(std::isfinite(config.sequential_sigma_translation) && config.sequential_sigma_translation > 0.0,
+        "graph slam: sequential_sigma_translation must be > 0");
+  check(std::isfinite(config.sequential_sigma_rotation) && config.sequential_sigma_rotation > 0.0,
+        "graph slam: sequential_sigma_rotation must be > 0");
   validate(config.loop_closure);
   validate(config.back_end);
   check(std::isfinite(config.map_resolution) && config.map_resolution > 0.0, "graph slam: map_resolution must be > 0");
-  check(std::isfinite(config.max_prior_dt) && config.max_prior_dt >= 0.0, "graph slam: max_prior_dt must be >= 0");
-  check(std::isfinite(config.unmatched_sigma_translation) && config.unmatched_sigma_translation > 0.0,
-        "graph slam: unmatched_sigma_translation must be > 0");
-  check(std::isfinite(config.unmatched_sigma_rotation) && config.unmatched_sigma_rotation > 0.0,
-        "graph slam: unmatched_sigma_rotation must be > 0");
-  const OdometryNoise& noise = config.odometry_noise;
-  check(noise.translation_floor > 0.0 && noise.rotation_floor > 0.0, "graph slam: odometry noise floors must be > 0");
-  check(noise.translation_per_metre >= 0.0 && noise.rotation_per_radian >= 0.0 && noise.rotation_per_metre >= 0.0,
-        "graph slam: odometry noise slopes must be >= 0");
-}
-
-Covariance3 odometry_covariance(const SE2& motion, const OdometryNoise& noise) {
-  const double distance = motion.translation().norm();
-  const double sigma_translation = noise.translation_floor + noise.translation_per_metre * distance;
-  const double sigma_rotation = noise.rotation_floor + noise.rotation_per_radian * std::abs(motion.theta()) +
-                                noise.rotation_per_metre * distance;
-  return covariance_from_sigmas(sigma_translation, sigma_translation, sigma_rotation);
-}
-
-ScanToMapResult fuse_with_prediction(const ScanToMapResult& match, const SE2& prediction,
-                                     const Covariance3& prediction_covariance) {
-  // In the prediction's frame: the prediction is 0, the match is delta with its covariance rotated in.
-  const Eigen::Vector3d delta = prediction.between(match.T_map_robot).vector();
-  const Eigen::Matrix3d match_information =
-      information_from_covariance(rotate_covariance(match.covariance, -prediction.theta()));
-  const Eigen::Matrix3d fused_information = match_information + information_from_covariance(prediction_covariance);
-  const Covariance3 fused_covariance = fused_information.inverse();
-  ScanToMapResult fused = match;
-  fused.T_map_robot = prediction * SE2::from_vector(fused_covariance * match_information * delta);
-  fused.covariance = rotate_covariance(0.5 * (fused_covariance + fused_covariance.transpose()), prediction.theta());
-  return fused;
 }
 
 GraphSlam::GraphSlam(const GraphSlamConfig& config)
@@ -66,14 +44,6 @@ SE2 GraphSlam::current_pose() const {
   return graph_.poses[keyframes_[last.keyframe].node] * last.T_keyframe_robot;
 }
 
-SE2 GraphSlam::predict(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) const {
-  const SE2 last = current_pose();
-  if (T_odom_robot && last_odom_) return last * last_odom_->between(*T_odom_robot);
-  const double dt = scan.stamp - last_stamp_;
-  if (!velocity_ || dt <= 0.0 || dt > config_.max_prior_dt) return last;
-  return last * SE2::exp(dt * velocity_->log());
-}
-
 PointCloud2 GraphSlam::scan_cloud(const LaserScan& scan) const {
   PointCloud2 cloud;
   cloud.points = usable_end_points(scan, config_.min_range, config_.max_range);
@@ -81,97 +51,57 @@ PointCloud2 GraphSlam::scan_cloud(const LaserScan& scan) const {
   return cloud;
 }
 
-// The local map: the most recent keyframes within buffer_distance of travel (Karto's running
-// scans), cropped around the last keyframe; rebuilt only when a keyframe or the graph changed.
-const MatchMap& GraphSlam::local_map() {
-  if (local_map_stale_) {
-    rebuild_local_map();
-    local_map_stale_ = false;
+// The scan matched against the tracker's map (its own frame), from the odometry prediction when
+// the scans come with odometry (with the weak prior there), else from the last pose (no prior).
+HectorStep GraphSlam::track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
+  if (!tracker_) {
+    HectorSlamConfig config = config_.tracking;
+    config.prior = T_odom_robot ? MotionPrior::kOdometry : MotionPrior::kLastPose;
+    if (!T_odom_robot) {  // the last pose is no measurement of where the robot is: no prior at it
+      config.prior_information_translation = 0.0;
+      config.prior_information_rotation = 0.0;
+    }
+    tracker_.emplace(config);
   }
-  return local_map_;
-}
-
-ScanToMapResult GraphSlam::match_local_map(const PointCloud2& cloud, const SE2& guess) {
-  return match_scan_to_map(local_map(), cloud, guess, config_.sequential.match);
-}
-
-// A scan between keyframes: the odometry prediction refined against the local map.
-SE2 GraphSlam::track(const PointCloud2& cloud, const SE2& prediction) {
-  const MatchMap& map = local_map();
-  if (map.cloud.size() < 3 || cloud.size() < 3) return prediction;
-  const MapMatchConfig& config = config_.sequential.match;
-  const MatchResult fine = match_point_to_plane(map.grid.tree(), map.cloud, cloud, prediction, config.refinement);
-  const SE2 shift = prediction.between(fine.T_target_source);
-  const bool plausible = shift.translation().norm() <= config.max_refinement_shift &&
-                         std::abs(shift.theta()) <= config.correlative.window_theta;
-  return fine.converged && plausible ? fine.T_target_source : prediction;
-}
-
-void GraphSlam::rebuild_local_map() {
-  std::vector<const Keyframe*> members;
-  std::vector<SE2> poses;
-  const double path_end = keyframes_.back().path_distance;
-  for (std::size_t k = keyframes_.size(); k-- > 0;) {
-    if (static_cast<int>(members.size()) >= config_.sequential.buffer_size) break;
-    if (path_end - keyframes_[k].path_distance > config_.sequential.buffer_distance) break;
-    members.push_back(&keyframes_[k]);
-    poses.push_back(graph_.poses[keyframes_[k].node]);
-  }
-  const Eigen::Vector2d center = graph_.poses[keyframes_.back().node].translation();
-  const MapMatchConfig& match = config_.sequential.match;
-  local_map_ = make_match_map(map_cloud(members, poses, center, config_.sequential.map_radius, match.map_voxel), match);
+  const bool with_odometry = tracker_->config().prior == MotionPrior::kOdometry;
+  check(with_odometry == T_odom_robot.has_value(),
+        "graph slam: odometry must come with every scan or with none (it changed at scan " +
+            std::to_string(stats_.scans) + ")");
+  HectorInputs inputs;
+  inputs.T_odom_robot = T_odom_robot;
+  return tracker_->add_scan(scan, inputs);
 }
 
 GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
   GraphSlamStep step;
-  const SE2 previous = current_pose();
-  const SE2 prediction = predict(scan, T_odom_robot);
+  const HectorStep tracked = track(scan, T_odom_robot);
   const bool first = keyframes_.empty();
-  PointCloud2 cloud = scan_cloud(scan);
-  ScanToMapResult match;
-  // With odometry the prediction may be refined (tracking); a scan that is then a keyframe
-  // candidate is matched with the search. Without odometry every scan is searched: its match is
-  // the only measure of where it is.
-  SE2 guess = prediction;
-  if (!first && T_odom_robot && config_.sequential.track_every_scan) guess = track(cloud, prediction);
-  match.T_map_robot = guess;
-  if (!first && (!T_odom_robot || selector_.is_keyframe(guess, scan.stamp))) {
-    match = match_local_map(cloud, guess);
-    if (!match.converged) match.T_map_robot = guess;
-    if (match.converged && T_odom_robot) {
-      const SE2 motion = graph_.poses[keyframes_.back().node].between(guess);
-      match = fuse_with_prediction(match, guess, odometry_covariance(motion, config_.odometry_noise));
-    }
-  }
-  const SE2 estimate = match.T_map_robot;
+  // The tracked motion since the last keyframe, carried from its (optimised) graph pose.
+  const SE2 estimate = first ? SE2() : graph_.poses[keyframes_.back().node] * T_tracker_keyframe_.between(tracked.T_map_robot);
+  step.matched = tracked.matched && !tracked.match.degenerate;
   if (first || selector_.is_keyframe(estimate, scan.stamp)) {
-    add_keyframe(scan, std::move(cloud), guess, match);
+    add_keyframe(scan, estimate, first || step.matched);
+    T_tracker_keyframe_ = tracked.T_map_robot;
     step.keyframe = true;
-    step.matched = match.converged;
     step.loop_closures = close_loops();
   } else {
     const std::size_t keyframe = keyframes_.size() - 1;
     scans_.push_back({scan.stamp, keyframe, graph_.poses[keyframes_[keyframe].node].between(estimate)});
   }
-  const double dt = scan.stamp - last_stamp_;
-  if (!first && dt > 0.0 && step.loop_closures == 0) velocity_ = SE2::exp(previous.between(current_pose()).log() / dt);
-  last_odom_ = T_odom_robot;
-  last_stamp_ = scan.stamp;
   ++stats_.scans;
   step.T_map_robot = current_pose();
   return step;
 }
 
-void GraphSlam::add_keyframe(const LaserScan& scan, PointCloud2 cloud, const SE2& prediction,
-                             const ScanToMapResult& match) {
-  const bool first = keyframes_.empty();
+void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched) {
   Keyframe keyframe;
   keyframe.node = graph_.poses.size();
   keyframe.scan = stats_.scans;
   keyframe.stamp = scan.stamp;
-  keyframe.cloud = std::move(cloud);
-  const SE2 estimate = first ? SE2() : match.T_map_robot;
-  if (!first) {
+  keyframe.cloud = scan_cloud(scan);
+  if (keyframes_.empty()) {
+    keyframe_motion_.push_back(SE2());
+  } else {
     const Keyframe& previous = keyframes_.back();
     const SE2& T_map_previous = graph_.poses[previous.node];
     keyframe.path_distance = previous.path_distance + (estimate.translation() - T_map_previous.translation()).norm();
@@ -179,24 +109,20 @@ void GraphSlam::add_keyframe(const LaserScan& scan, PointCloud2 cloud, const SE2
     edge.from = static_cast<int>(previous.node);
     edge.to = static_cast<int>(keyframe.node);
     edge.T_from_to = T_map_previous.between(estimate);
+    const double sigma_translation = config_.sequential_sigma_translation;
     const Covariance3 covariance =
-        match.converged ? rotate_covariance(match.covariance, -T_map_previous.theta())
-                        : covariance_from_sigmas(config_.unmatched_sigma_translation, config_.unmatched_sigma_translation,
-                                                 config_.unmatched_sigma_rotation);
+        covariance_from_sigmas(sigma_translation, sigma_translation, config_.sequential_sigma_rotation);
     edge.information = information_from_covariance(covariance);
     graph_.edges.push_back(edge);
     uncertainty_variance_ += covariance(0, 0) + covariance(1, 1);
-    keyframe_motion_.push_back(T_map_previous.between(prediction));
-    if (!match.converged) ++stats_.sequential_failures;
-  } else {
-    keyframe_motion_.push_back(SE2());
+    keyframe_motion_.push_back(edge.T_from_to);
+    if (!matched) ++stats_.sequential_failures;
   }
   graph_.poses.push_back(estimate);
   selector_.accept(estimate, scan.stamp);
   scans_.push_back({scan.stamp, keyframes_.size(), SE2()});
   keyframes_.push_back(std::move(keyframe));
   keyframe_scans_.push_back(scan);
-  local_map_stale_ = true;
   ++stats_.keyframes;
 }
 
@@ -224,7 +150,6 @@ int GraphSlam::close_loops() {
 void GraphSlam::optimize() {
   const SparsePoseAdjustmentResult result = back_end_.optimize(graph_);
   stats_.optimization_seconds += result.seconds;
-  local_map_stale_ = true;
   ++stats_.optimizations;
 }
 
@@ -233,7 +158,7 @@ void GraphSlam::finish() {
   if (graph_.poses.size() > 1) optimize();
 }
 
-// A scan between keyframes a and b: its motion from a (odometry, or its match) carried forward
+// A scan between keyframes a and b: its tracked motion from a carried forward
 // from a's optimised pose and backward from b's, blended by how far along the motion from a to b
 // it is, so the chain of scans meets both optimised ends.
 SE2 GraphSlam::interpolated_pose(const ScanRecord& record) const {

@@ -6,16 +6,18 @@
 //
 // 1. keyframes: a scan becomes a node when the robot moved min_distance or turned min_angle since
 //    the last keyframe, or min_time passed (keyframes.hpp);
-// 2. sequential constraint: the keyframe is matched against the recent keyframes rasterised into
-//    a local map, correlative then refined (scan_to_map.hpp); the edge to the previous keyframe
-//    carries the inverse of the match covariance;
+// 2. sequential constraint: every scan is tracked against a local occupancy-grid map by
+//    Gauss-Newton on a map pyramid (Hector's matcher, slam/hector, with a weak prior at the
+//    odometry prediction); the tracked motion from the previous keyframe is the edge, with a small
+//    fixed covariance (a scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
+//    matches do, so the chain is stiff and the loop edges bend it only where it drifted);
 // 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
 //    local map searched over a large window by branch-and-bound, accepted above a response
 //    threshold after a fine refinement (loop_closure.hpp);
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started.
-// Every scan gets a pose: keyframes their optimised node, the scans between two keyframes the
-// odometry (or the matched motion) between them, bent to meet both optimised ends.
+// Every scan gets a pose: keyframes their optimised node, the scans between two keyframes their
+// tracked motion, bent to meet both optimised ends.
 
 #include <cstddef>
 #include <optional>
@@ -30,41 +32,27 @@
 #include "slam2d/slam/graph/keyframes.hpp"
 #include "slam2d/slam/graph/loop_closure.hpp"
 #include "slam2d/slam/graph/scan_to_map.hpp"
+#include "slam2d/slam/hector/hector_slam.hpp"
 
 namespace slam2d {
 
-/// The odometry's uncertainty over the motion from one keyframe to the next: the sequential
-/// constraint fuses it with the match, so that directions the scan leaves open (a corridor's axis)
-/// follow the odometry. Standard deviations grow linearly with the motion, from a floor.
-struct OdometryNoise {
-  double translation_floor = 0.02;   // m, > 0
-  double translation_per_metre = 0.1;  // 1, >= 0
-  double rotation_floor = 0.02;      // rad, > 0
-  double rotation_per_radian = 0.1;  // 1, >= 0
-  double rotation_per_metre = 0.05;  // rad/m, >= 0
-};
-
-/// The covariance (robot frame at the end of the motion, first order) of an odometry motion.
-Covariance3 odometry_covariance(const SE2& motion, const OdometryNoise& noise);
-
-/// The information-form fusion of a match (pose and covariance, map frame) with a prediction of
-/// covariance `prediction_covariance` (the predicted pose's frame): the pose minimising both
-/// Mahalanobis distances, and its covariance in the map frame.
-ScanToMapResult fuse_with_prediction(const ScanToMapResult& match, const SE2& prediction,
-                                     const Covariance3& prediction_covariance);
+/// The tracker's configuration: Hector's, with a weak Gaussian prior at the motion prediction
+/// (sigma 0.1 m and 0.058 rad), which keeps the directions a scan leaves open (a corridor's axis)
+/// at the odometry.
+HectorSlamConfig default_tracking_config();
 
 struct GraphSlamConfig {
-  double min_range = 0.1;   // m, shorter readings are dropped (robot body)
-  double max_range = 25.0;  // m, longer readings are dropped for matching (no-return beams always are)
+  double min_range = 0.1;   // m, shorter readings are dropped from the keyframes' clouds (robot body)
+  double max_range = 25.0;  // m, longer readings are dropped (no-return beams always are)
   KeyframeConfig keyframes{};
-  ScanToMapConfig sequential{};
+  // The tracker's prediction is the odometry when the scans come with it, else the last pose
+  // (Hector's no-odometry settings, without the prior): tracking.prior itself is ignored.
+  HectorSlamConfig tracking = default_tracking_config();
+  double sequential_sigma_translation = 0.002;  // m, > 0: standard deviations of a sequential edge
+  double sequential_sigma_rotation = 0.001;     // rad, > 0
   LoopClosureConfig loop_closure{};
   SparsePoseAdjustmentConfig back_end{.loop_kernel = {.type = RobustKernelType::kCauchy, .scale = 3.0}};
-  double map_resolution = 0.05;      // m per cell of the occupancy map built from the keyframes
-  double max_prior_dt = 1.0;         // s, without odometry constant velocity is not extrapolated over longer gaps
-  double unmatched_sigma_translation = 0.1;  // m, > 0: the edge of a keyframe whose match failed (the prediction's)
-  double unmatched_sigma_rotation = 0.05;    // rad, > 0
-  OdometryNoise odometry_noise{};
+  double map_resolution = 0.05;  // m per cell of the occupancy map built from the keyframes
 };
 
 /// Throws Error for out-of-range values.
@@ -73,7 +61,7 @@ void validate(const GraphSlamConfig& config);
 struct GraphSlamStep {
   SE2 T_map_robot;          // the current estimate of this scan's pose
   bool keyframe = false;    // the scan became a graph node
-  bool matched = false;     // its sequential match converged (keyframes only)
+  bool matched = false;     // the tracker matched the scan (a map existed, the match was not degenerate)
   int loop_closures = 0;    // loop edges added at this scan
 };
 
@@ -84,7 +72,7 @@ struct GraphSlamStats {
   std::size_t near_links = 0;           // loop edges to near chains (small window)
   std::size_t loop_attempts = 0;        // chains searched over the large window
   std::size_t optimizations = 0;
-  std::size_t sequential_failures = 0;  // keyframes placed by the prediction alone
+  std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   double optimization_seconds = 0.0;
   double loop_seconds = 0.0;
 };
@@ -93,8 +81,9 @@ class GraphSlam {
  public:
   explicit GraphSlam(const GraphSlamConfig& config = {});
 
-  /// Processes one scan; T_odom_robot is the odometry pose at the scan when the log has it
-  /// (without, the prediction is constant velocity from the last two keyframes' matches).
+  /// Processes one scan; T_odom_robot is the odometry pose at the scan when the log has it (give
+  /// it for every scan or for none: the tracker's prior is chosen at the first scan). Throws Error
+  /// when odometry stops midway.
   GraphSlamStep add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot = std::nullopt);
   /// Closes a pending delayed loop and runs the final optimisation.
   void finish();
@@ -113,18 +102,14 @@ class GraphSlam {
   struct ScanRecord {
     double stamp = 0.0;
     std::size_t keyframe = 0;   // the last keyframe at or before this scan
-    SE2 T_keyframe_robot;       // the scan relative to that keyframe (odometry or matched motion)
+    SE2 T_keyframe_robot;       // the scan relative to that keyframe (tracked motion)
   };
 
-  SE2 predict(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) const;
   PointCloud2 scan_cloud(const LaserScan& scan) const;
-  ScanToMapResult match_local_map(const PointCloud2& cloud, const SE2& guess);
-  SE2 track(const PointCloud2& cloud, const SE2& prediction);
-  const MatchMap& local_map();
-  void add_keyframe(const LaserScan& scan, PointCloud2 cloud, const SE2& prediction, const ScanToMapResult& match);
+  HectorStep track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot);
+  void add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched);
   int close_loops();
   void add_closure(const LoopClosure& closure);
-  void rebuild_local_map();
   void optimize();
   SE2 current_pose() const;
   SE2 interpolated_pose(const ScanRecord& record) const;
@@ -133,17 +118,14 @@ class GraphSlam {
   KeyframeSelector selector_;
   std::vector<Keyframe> keyframes_;
   std::vector<LaserScan> keyframe_scans_;  // for the map
-  std::vector<SE2> keyframe_motion_;       // predicted motion from the previous keyframe (odometry or matched)
+  std::vector<SE2> keyframe_motion_;       // tracked motion from the previous keyframe
   std::vector<ScanRecord> scans_;
   PoseGraph graph_;
   SparsePoseAdjustment back_end_;
   LoopCloser loop_closer_;
   GraphSlamStats stats_;
-  MatchMap local_map_;                 // the recent keyframes' points, rebuilt when a keyframe or the graph changes
-  bool local_map_stale_ = true;
-  std::optional<SE2> last_odom_;     // odometry pose at the previous scan
-  std::optional<SE2> velocity_;      // without odometry: the motion per second between the last two scans
-  double last_stamp_ = 0.0;
+  std::optional<HectorSlam> tracker_;  // made at the first scan, when it is known whether odometry comes
+  SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
   double uncertainty_variance_ = 0.0;  // m^2, position variance accumulated since the last loop closure
 };
 

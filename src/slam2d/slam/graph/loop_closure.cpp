@@ -131,7 +131,7 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
   const SE2& guess = node_pose(graph, keyframes[current]);
   const double map_radius = config_.map_radius + std::max(match_config.correlative.window_x, match_config.correlative.window_y);
   const MatchMap map = make_match_map(map_cloud(members, poses, guess.translation(), map_radius, match_config.map_voxel), match_config);
-  const ScanToMapResult match = match_scan_to_map(map, keyframes[current].cloud, guess, match_config);
+  const MapMatchResult match = match_scan_to_map(map, keyframes[current].cloud, guess, match_config);
   if (!match.converged || !match.refined || match.inlier_fraction < config_.min_inlier_fraction) return std::nullopt;
   if (config_.reject_degenerate && match.degenerate) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> translation(match.covariance.topLeftCorner<2, 2>());

@@ -25,13 +25,6 @@ void validate(const MapMatchConfig& config) {
         "scan-to-map: min_score_at_window_edge must be in [0, 1]");
 }
 
-void validate(const ScanToMapConfig& config) {
-  validate(config.match);
-  check(config.buffer_size >= 1, "scan-to-map: buffer_size must be >= 1");
-  check(std::isfinite(config.buffer_distance) && config.buffer_distance > 0.0, "scan-to-map: buffer_distance must be > 0");
-  check(std::isfinite(config.map_radius) && config.map_radius > 0.0, "scan-to-map: map_radius must be > 0");
-}
-
 PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
                       const Eigen::Vector2d& center, double radius, double voxel) {
   PointCloud2 map;
@@ -92,9 +85,9 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config) {
   return map;
 }
 
-ScanToMapResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+MapMatchResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
                                   const MapMatchConfig& config) {
-  ScanToMapResult result;
+  MapMatchResult result;
   result.T_map_robot = T_map_robot_guess;
   if (map.cloud.size() < 3 || scan.size() < 3) return result;
   const MatchResult coarse = match_correlative(map.grid, scan, T_map_robot_guess, config.correlative);

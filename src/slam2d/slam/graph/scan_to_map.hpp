@@ -1,5 +1,5 @@
 #pragma once
-// Scan-to-map matching for graph SLAM's constraints (the "scan matcher" of Karto): the scan's end
+// Scan-to-map matching for graph SLAM's loop closures (the "scan matcher" of Karto): the scan's end
 // points (robot frame) against a cloud of earlier keyframes' points in the map frame, rasterised
 // into a correlative lookup table (E. Olson, "Real-time correlative scan matching", ICRA 2009) and
 // searched by branch-and-bound over a window around the guess; the best pose is then refined by
@@ -7,8 +7,8 @@
 // point_to_plane.hpp). The covariance is Olson's, from the response over the window (Eq. (3)),
 // floored so that no constraint claims more than the sensor can give.
 //
-// The sequential constraint matches against the local map of the recent keyframes; loop closure
-// against a chain of old keyframes over a larger window (loop_closure.hpp). Both use MapMatchConfig.
+// Loop closure matches a keyframe against a chain of old keyframes over a large window
+// (loop_closure.hpp).
 
 #include <cstddef>
 #include <vector>
@@ -38,17 +38,7 @@ struct MapMatchConfig {
   double min_score_at_window_edge = 0.8;  // 1, in [0, 1]; 1 never keeps one
 };
 
-struct ScanToMapConfig {
-  MapMatchConfig match{};
-  int buffer_size = 10;          // 1, >= 1: the most recent keyframes in the local map
-  double buffer_distance = 10.0; // m, > 0: ... travelled at most this far before the new scan
-  double map_radius = 15.0;      // m, > 0: map points farther than this from the last keyframe are left out
-  // With odometry, the scans between keyframes are also refined against the local map (point-to-line
-  // from the odometry prediction, no search), so that each one's pose is measured, not only predicted.
-  bool track_every_scan = true;
-};
-
-struct ScanToMapResult {
+struct MapMatchResult {
   SE2 T_map_robot;                                   // the estimate (the guess when not converged)
   Covariance3 covariance = Covariance3::Identity() * 1e6;
   bool converged = false;        // the correlative search found an inner maximum above min_score
@@ -60,7 +50,6 @@ struct ScanToMapResult {
 
 /// Throws Error for out-of-range values.
 void validate(const MapMatchConfig& config);
-void validate(const ScanToMapConfig& config);
 
 /// Map-frame points (and normals) of the keyframes, each at its pose, within `radius` of `center`,
 /// one per `voxel` x `voxel` cell (the first keyframe's first: the same wall seen from many
@@ -80,7 +69,7 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config);
 
 /// Matches the robot-frame `scan` against the map from the guess. A map or scan of fewer than 3
 /// points gives converged = false and the guess.
-ScanToMapResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+MapMatchResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
                                   const MapMatchConfig& config);
 
 }  // namespace slam2d
