@@ -14,5 +14,6 @@ void add_demo_command(CLI::App& app);
 void add_odometry_command(CLI::App& app);
 void add_match_bench_command(CLI::App& app);
 void add_optimize_command(CLI::App& app);
+void add_localize_command(CLI::App& app);
 
 }  // namespace slam2d::cli

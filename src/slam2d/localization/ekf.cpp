@@ -1,0 +1,95 @@
+#include "slam2d/localization/ekf.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/localization/sensor_model.hpp"
+
+namespace slam2d {
+
+void validate(const EkfConfig& config) {
+  validate(config.motion);
+  check(config.max_beams > 0 && config.usable_range > 0.0, "ekf: max_beams and usable_range must be > 0");
+  check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0, "ekf: min_inlier_fraction must be in [0, 1]");
+  check(config.gate_chi2 > 0.0, "ekf: gate_chi2 must be > 0");
+  check(config.lost_after_rejections >= 1, "ekf: lost_after_rejections must be >= 1");
+  check(config.matcher.max_iterations >= 1 && config.matcher.outlier_distance > 0.0 && config.matcher.inlier_distance > 0.0 &&
+            config.matcher.sigma > 0.0,
+        "ekf: matcher settings must be positive");
+}
+
+EkfLocalization::EkfLocalization(const LocalizationMap& map, const EkfConfig& config)
+    : map_(map), config_(config), status_(config.status) {
+  validate(config_);
+}
+
+void EkfLocalization::initialize(const SE2& T_map_robot, const Covariance3& covariance) {
+  check(is_valid_covariance(covariance), "ekf: the initial covariance must be symmetric positive semi-definite");
+  pose_ = T_map_robot;
+  covariance_ = make_positive_definite(covariance, 1e-10);
+  initialized_ = true;
+  started_ = false;
+  rejections_ = 0;
+  status_.reset();
+}
+
+bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) {
+  ++stats_.updates;
+  const ScanToMapResult match = match_scan_to_map(map_.field(), points_robot, pose_, config_.matcher);
+  if (match.inlier_fraction < config_.min_inlier_fraction) {
+    ++stats_.rejected_match;
+    return false;
+  }
+  const Covariance3 R = match.covariance + covariance_from_sigmas(config_.measurement_sigma_xy, config_.measurement_sigma_xy,
+                                                                  config_.measurement_sigma_theta);
+  Eigen::Vector3d innovation = match.T_map_robot.vector() - pose_.vector();
+  innovation.z() = angle_difference(match.T_map_robot.theta(), pose_.theta());
+  const Eigen::Matrix3d S = covariance_ + R;
+  if (innovation.dot(S.ldlt().solve(innovation)) > config_.gate_chi2) {  // Mahalanobis gate
+    ++stats_.rejected_gate;
+    return false;
+  }
+  // Information form: P+^-1 = P^-1 + R^-1, x+ = x + P+ R^-1 (z - x).
+  const Eigen::Matrix3d R_inverse = information_from_covariance(R);
+  const Eigen::Matrix3d posterior = (information_from_covariance(covariance_) + R_inverse).inverse();
+  const Eigen::Vector3d correction = posterior * R_inverse * innovation;
+  pose_ = SE2(pose_.x() + correction.x(), pose_.y() + correction.y(), pose_.theta() + correction.z());
+  covariance_ = make_positive_definite(0.5 * (posterior + posterior.transpose()), 1e-10);
+  ++stats_.accepted;
+  return true;
+}
+
+LocalizationEstimate EkfLocalization::update(const SE2& T_odom_robot, const LaserScan& scan) {
+  check(initialized_, "ekf: initialize() before update()");
+  if (started_) {
+    const MotionPrediction prediction =
+        predict_odometry_motion(pose_, covariance_, decompose_odometry(last_odom_, T_odom_robot), config_.motion);
+    pose_ = prediction.pose;
+    covariance_ = prediction.covariance;
+  }
+  started_ = true;
+  last_odom_ = T_odom_robot;
+  const ScanBeams beams = select_beams(scan, config_.max_beams, config_.usable_range);
+  // Once lost the filter stays lost (it cannot relocalize): it only predicts.
+  if (!lost()) {
+    const bool accepted = correct(beams.points_robot);
+    rejections_ = accepted ? 0 : rejections_ + 1;
+    if (!accepted) {
+      covariance_ += covariance_from_sigmas(config_.rejection_sigma_xy, config_.rejection_sigma_xy, config_.rejection_sigma_theta);
+    }
+  }
+  LocalizationEstimate estimate;
+  estimate.pose = pose_;
+  estimate.covariance = covariance_;
+  estimate.plausibility = map_.plausibility(beams.points_robot, pose_, config_.status.plausibility_distance);
+  estimate.localized = status_.update(covariance_, estimate.plausibility);
+  if (rejections_ >= config_.lost_after_rejections) {
+    status_.reset();
+    estimate.localized = false;
+  }
+  return estimate;
+}
+
+}  // namespace slam2d

@@ -1,0 +1,100 @@
+#pragma once
+// EKF localization with scan-matching updates: J.-S. Gutmann, W. Burgard, D. Fox, K. Konolige,
+// "An experimental comparison of localization methods", IROS 1998 (the scan-matching Kalman
+// filter of that comparison), with the odometry motion model of S. Thrun et al., "Probabilistic
+// Robotics", 2005 (Table 7.3 in its odometry form, motion_model.hpp).
+//
+// Each scan: predict the pose and covariance with the odometry since the last scan (G P G^T +
+// V M V^T), match the scan against the map from the predicted pose (scan_to_map.hpp) to get a
+// pose measurement z with covariance R, and fuse it in information form (the measurement is the
+// pose itself, H = I):
+//   P+^-1 = P^-1 + R^-1,   x+ = x + P+ R^-1 (z - x).
+// Gates reject implausible matches (no fusion; the covariance grows by rejection_sigma per
+// rejected scan, so that after a wheel slip the gate opens to the next consistent match):
+//   - fewer than min_inlier_fraction of the end points lie within the matcher's inlier_distance
+//     of an obstacle after the match (a match that used up its iterations still counts: near the
+//     optimum the damped steps only get smaller);
+//   - the innovation's Mahalanobis distance (z - x)^T (P + R)^-1 (z - x) exceeds gate_chi2
+//     (chi-square, 3 degrees of freedom).
+// After lost_after_rejections consecutive rejections the filter reports itself lost instead of
+// pretending to track, and stays lost (it only predicts) until initialize() is called again: an
+// EKF cannot relocalize globally (use mcl, markov or hybrid for that).
+
+#include <cstddef>
+#include <string>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/localization/localization_map.hpp"
+#include "slam2d/localization/localizer.hpp"
+#include "slam2d/localization/motion_model.hpp"
+#include "slam2d/localization/scan_to_map.hpp"
+
+namespace slam2d {
+
+struct EkfConfig {
+  // Rotation noise from rotation well above the particle filter's: a Gaussian cannot absorb the
+  // wheel slip of a fast turn in the tails as a particle set does, and a rejected match costs more.
+  OdometryMotionConfig motion{.alpha1 = 0.2};
+  ScanToMapConfig matcher{};
+  int max_beams = 90;                // 1, > 0: end points matched per scan
+  double usable_range = 30.0;        // m, > 0
+  double min_inlier_fraction = 0.5;  // 1, in [0, 1]
+  double gate_chi2 = 16.27;          // 1, > 0: chi-square(3) at 0.999
+  int lost_after_rejections = 10;    // scans, >= 1
+  // Each rejected scan widens the covariance by this much (the odometry may have slipped: the
+  // gate must open to the first consistent match rather than reject it forever).
+  double rejection_sigma_xy = 0.05;     // m, >= 0
+  double rejection_sigma_theta = 0.02;  // rad, >= 0
+  // Added to the matcher's covariance: consecutive scans of a standing robot are not independent
+  // measurements, and the Hessian covariance of ~90 correlated end points is optimistic.
+  double measurement_sigma_xy = 0.1;      // m, >= 0
+  double measurement_sigma_theta = 0.05;  // rad, >= 0
+  LocalizationStatusConfig status{};
+};
+
+/// Throws Error for values outside the ranges above.
+void validate(const EkfConfig& config);
+
+struct EkfStats {
+  std::size_t updates = 0;          // scans matched
+  std::size_t accepted = 0;         // fused
+  std::size_t rejected_match = 0;   // too few inliers
+  std::size_t rejected_gate = 0;    // Mahalanobis gate
+};
+
+class EkfLocalization : public Localizer {
+ public:
+  /// The map must outlive the filter. Call initialize() before update().
+  EkfLocalization(const LocalizationMap& map, const EkfConfig& config = {});
+
+  /// The prior: pose and covariance. The next update() takes its odometry as the reference.
+  void initialize(const SE2& T_map_robot, const Covariance3& covariance);
+  bool initialized() const { return initialized_; }
+
+  LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
+  std::size_t sensor_updates() const override { return stats_.updates; }
+  std::string name() const override { return "ekf"; }
+
+  const EkfStats& stats() const { return stats_; }
+  /// lost_after_rejections consecutive matches have failed the gates.
+  bool lost() const { return rejections_ >= config_.lost_after_rejections; }
+  const SE2& pose() const { return pose_; }
+  const Covariance3& covariance() const { return covariance_; }
+
+ private:
+  /// Matches and fuses; returns true when the measurement passed the gates.
+  bool correct(const std::vector<Eigen::Vector2d>& points_robot);
+
+  const LocalizationMap& map_;
+  EkfConfig config_;
+  bool initialized_ = false;
+  bool started_ = false;
+  SE2 last_odom_;
+  SE2 pose_;
+  Covariance3 covariance_ = Covariance3::Identity();
+  LocalizationStatus status_;
+  int rejections_ = 0;
+  EkfStats stats_;
+};
+
+}  // namespace slam2d

@@ -1,0 +1,53 @@
+#pragma once
+// Hybrid localization, as proposed by J.-S. Gutmann, W. Burgard, D. Fox, K. Konolige, "An
+// experimental comparison of localization methods", IROS 1998 (Sec. VI: combine the robustness
+// of grid-based Markov localization with the accuracy and efficiency of the scan-matching
+// Kalman filter): a coarse Markov grid (markov_grid.hpp) runs all the time and watches
+// plausibility; the EKF (ekf.hpp) runs while the pose is unique and takes its prior from the
+// grid. The grid takes over when
+//   - the EKF reports itself lost (its matches keep failing the gates), or
+//   - the grid is localized (unique) at a pose more than max_disagreement from the EKF's;
+// and the EKF is restarted from the grid's estimate as soon as the grid is unique again.
+// The estimate reported is the EKF's while it runs, else the grid's.
+
+#include <cstddef>
+#include <string>
+
+#include "slam2d/localization/ekf.hpp"
+#include "slam2d/localization/markov_grid.hpp"
+
+namespace slam2d {
+
+struct HybridConfig {
+  MarkovGridConfig grid{.resolution = 0.4, .angles = 36, .max_beams = 30, .sigma_hit = 0.5, .update_distance = 0.4,
+                        .update_angle = 0.1745};
+  EkfConfig ekf{};
+  double max_disagreement = 1.5;  // m, > 0
+};
+
+class HybridLocalization : public Localizer {
+ public:
+  HybridLocalization(const LocalizationMap& map, const HybridConfig& config = {});
+
+  void initialize(const SE2& T_map_robot, const Covariance3& covariance);
+  void initialize_global();
+
+  LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
+  std::size_t sensor_updates() const override { return sensor_updates_; }
+  std::string name() const override { return "hybrid"; }
+
+  bool ekf_active() const { return ekf_active_; }
+  std::size_t handovers() const { return handovers_; }  // grid -> EKF starts
+  const EkfLocalization& ekf() const { return ekf_; }
+  const MarkovGridLocalization& grid() const { return grid_; }
+
+ private:
+  HybridConfig config_;
+  MarkovGridLocalization grid_;
+  EkfLocalization ekf_;
+  bool ekf_active_ = false;
+  std::size_t handovers_ = 0;
+  std::size_t sensor_updates_ = 0;
+};
+
+}  // namespace slam2d

@@ -1,0 +1,136 @@
+#pragma once
+// Monte Carlo localization: F. Dellaert, D. Fox, W. Burgard, S. Thrun, "Monte Carlo localization
+// for mobile robots", ICRA 1999; as Table 8.2 / 8.3 of S. Thrun, W. Burgard, D. Fox,
+// "Probabilistic Robotics", 2005, with
+// - KLD-sampling: D. Fox, "Adapting the sample size in particle filters through KLD-sampling",
+//   IJRR 22(12), 2003: the particle count n = (k - 1) / (2 eps) (1 - 2 / (9 (k - 1)) +
+//   sqrt(2 / (9 (k - 1))) z)^3 (Eq. 10), k the number of histogram bins with support;
+// - random-sample injection driven by the short- and long-term average likelihood: J.-S.
+//   Gutmann, D. Fox, "An experimental comparison of localization methods continued", IROS 2002
+//   (Table 8.3, Augmented_MCL): w_slow += a_slow (w_avg - w_slow), w_fast += a_fast (w_avg -
+//   w_fast), each resampled particle replaced by a random free pose with probability
+//   max(0, 1 - w_fast / (injection_ratio w_slow)), at most max_injection. This is what lets a
+//   kidnapped robot recover. (injection_ratio = 1 is the book's rule; 0.7 keeps a scene that is
+//   only partly explained, people or moved furniture, from seeding look-alike places.)
+//
+// One filter step (`update`): the odometry since the last filter update is accumulated; once the
+// robot has moved update_distance or turned update_angle, the particles are moved by samples of
+// the odometry motion model (motion_model.hpp, Table 5.6), weighed by the likelihood field
+// (LocalizationMap::scan_log_likelihood) over max_beams beams, summarised (weighted mean and
+// covariance), then resampled by low-variance resampling (Table 4.4) to the KLD count, with
+// injection. Between filter updates the estimate follows the odometry.
+//
+// Localized / lost (localizer.hpp) uses, besides the spread and the fraction of explained end
+// points, Gutmann & Fox's signal itself: w_fast < min_likelihood_ratio w_slow counts as an
+// implausible step (a compact particle cloud in a wrong but similar place is not "localized").
+// The injected random particles are binned with the rest, so KLD-sampling grows the set while
+// the filter searches.
+//
+// Deviations, on purpose: w_avg is the mean over particles of the per-beam geometric mean
+// likelihood exp(log p(z | x) / beams), scale-free where the product over beams would under- or
+// overflow; w_slow and w_fast start at the first w_avg (so a global start injects nothing until
+// the likelihood drops). The KLD bin count k is taken from a low-variance draw of the current
+// particle count before the final draw (an upper bound of the k a sequential draw would see).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/rng.hpp"
+#include "slam2d/localization/localization_map.hpp"
+#include "slam2d/localization/localizer.hpp"
+#include "slam2d/localization/motion_model.hpp"
+#include "slam2d/localization/sensor_model.hpp"
+
+namespace slam2d {
+
+enum class SensorModelKind { kLikelihoodField, kBeam };
+
+struct MclConfig {
+  OdometryMotionConfig motion{};
+  SensorModelKind sensor = SensorModelKind::kLikelihoodField;
+  BeamModelConfig beam{};           // for SensorModelKind::kBeam
+  int max_beams = 60;               // 1, > 0: beams scored per scan
+  double likelihood_exponent = 1.0; // 1, in (0, 1]: p(z | x)^exponent: neighbouring beams are not independent,
+                                    // and a sharper posterior than the map supports jumps to look-alike places
+  double usable_range = 30.0;       // m, > 0: longer readings are treated as max-range readings
+  std::size_t min_particles = 500;  // >= 1
+  std::size_t max_particles = 5000; // >= min_particles; also the count of a global start
+  bool kld_sampling = true;         // false: always max_particles
+  double kld_epsilon = 0.05;        // 1, > 0: bound on the KL divergence (Fox 2003)
+  double kld_z = 2.326;             // 1: upper 1 - delta quantile of N(0, 1) (delta = 0.01)
+  double kld_bin_xy = 0.5;          // m, > 0: histogram bin size
+  double kld_bin_theta = 0.1745;    // rad, > 0: 10 deg
+  double update_distance = 0.1;     // m, >= 0: filter update once the robot moved this far ...
+  double update_angle = 0.1;        // rad, >= 0: ... or turned this much
+  bool augmented = true;            // random-sample injection (Gutmann & Fox 2002)
+  double alpha_slow = 0.01;         // 1, in (0, 1): long-term average rate
+  double alpha_fast = 0.3;          // 1, in (alpha_slow, 1]: short-term average rate
+  double max_injection = 0.2;       // 1, in [0, 1]: cap on the injected fraction per step
+  double injection_ratio = 0.7;     // 1, in (0, 1]: inject only while w_fast < injection_ratio w_slow
+  double min_likelihood_ratio = 0.5; // 1: w_fast below this fraction of w_slow counts as implausible (status)
+  LocalizationStatusConfig status{};
+  std::uint64_t seed = 1;
+};
+
+/// Throws Error for values outside the ranges above.
+void validate(const MclConfig& config);
+
+/// KLD-sampling bound (Fox 2003, Eq. 10) for k bins; 1 for k <= 1.
+std::size_t kld_particle_count(std::size_t k, double epsilon, double z);
+
+class MonteCarloLocalization : public Localizer {
+ public:
+  /// The map must outlive the filter. Call one of the initialisers before update().
+  MonteCarloLocalization(const LocalizationMap& map, const MclConfig& config = {});
+
+  /// Particles drawn from a Gaussian around the pose (max(min_particles, 1000) of them).
+  void initialize(const SE2& T_map_robot, const Covariance3& covariance);
+  /// max_particles uniform over the free cells and headings.
+  void initialize_global();
+
+  LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
+  std::size_t sensor_updates() const override { return sensor_updates_; }
+  std::string name() const override { return "mcl"; }
+
+  // The steps, for tests and benchmarks.
+  void predict(const OdometryControl& u);
+  /// Weighs the particles by the scan; returns w_avg and updates w_slow, w_fast.
+  double weigh(const ScanBeams& beams);
+  /// The weighted mean and covariance of the particles (after weigh()).
+  LocalizationEstimate summarize(const ScanBeams& beams);
+  /// Low-variance resampling to the KLD count, with injection.
+  void resample();
+
+  const std::vector<SE2>& particles() const { return particles_; }
+  const std::vector<double>& weights() const { return weights_; }
+  double w_slow() const { return w_slow_; }
+  double w_fast() const { return w_fast_; }
+  std::size_t injected_last() const { return injected_last_; }
+  const MclConfig& config() const { return config_; }
+
+ private:
+  const LocalizationMap& map_;
+  MclConfig config_;
+  Rng rng_;
+  std::vector<SE2> particles_;
+  std::vector<double> weights_;  // normalised after weigh()
+  std::vector<SE2> scratch_;
+  bool initialized_ = false;
+  bool started_ = false;          // the first scan has been used
+  SE2 odom_at_update_;            // odometry pose at the last filter update
+  LocalizationEstimate estimate_;  // at the last filter update
+  LocalizationStatus status_;
+  double w_slow_ = 0.0;
+  double w_fast_ = 0.0;
+  std::size_t injected_last_ = 0;
+  std::size_t sensor_updates_ = 0;
+};
+
+/// Weighted mean (circular for theta) and covariance of poses; weights sum to 1.
+void weighted_pose_statistics(const std::vector<SE2>& poses, const std::vector<double>& weights, SE2* mean,
+                              Covariance3* covariance);
+
+}  // namespace slam2d

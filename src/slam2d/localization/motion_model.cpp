@@ -1,0 +1,93 @@
+#include "slam2d/localization/motion_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+namespace {
+
+constexpr double kTurnOnTheSpot = 0.01;  // m: shorter translations have no rot1
+
+// The rotation that scales the noise: the angle to the forward or the backward direction.
+double noise_angle(double rotation) {
+  const double a = std::abs(normalize_angle(rotation));
+  return std::min(a, std::numbers::pi - a);
+}
+
+}  // namespace
+
+void validate(const OdometryMotionConfig& config) {
+  for (const double value : {config.alpha1, config.alpha2, config.alpha3, config.alpha4, config.min_rotation_sigma,
+                             config.min_translation_sigma}) {
+    check(std::isfinite(value) && value >= 0.0, "odometry motion model: alphas and floors must be finite and >= 0");
+  }
+}
+
+OdometryControl decompose_odometry(const SE2& T_odom_previous, const SE2& T_odom_current) {
+  const Eigen::Vector2d delta = T_odom_current.translation() - T_odom_previous.translation();
+  OdometryControl u;
+  u.trans = delta.norm();                                                                  // Eq. (5.35)
+  u.rot1 = u.trans < kTurnOnTheSpot ? 0.0 : angle_difference(std::atan2(delta.y(), delta.x()), T_odom_previous.theta());  // Eq. (5.34)
+  u.rot2 = normalize_angle(T_odom_current.theta() - T_odom_previous.theta() - u.rot1);     // Eq. (5.36)
+  return u;
+}
+
+SE2 apply_odometry(const SE2& pose, const OdometryControl& u, Matrix3* J_pose, Matrix3* J_control) {
+  const double heading = pose.theta() + u.rot1;
+  const double c = std::cos(heading);
+  const double s = std::sin(heading);
+  if (J_pose != nullptr) {
+    *J_pose << 1.0, 0.0, -u.trans * s,  //
+        0.0, 1.0, u.trans * c,          //
+        0.0, 0.0, 1.0;
+  }
+  if (J_control != nullptr) {
+    *J_control << -u.trans * s, c, 0.0,  //
+        u.trans * c, s, 0.0,             //
+        1.0, 0.0, 1.0;
+  }
+  return SE2(pose.x() + u.trans * c, pose.y() + u.trans * s, heading + u.rot2);
+}
+
+Eigen::Matrix3d control_covariance(const OdometryControl& u, const OdometryMotionConfig& config) {
+  const double r1 = noise_angle(u.rot1);
+  const double r2 = noise_angle(u.rot2);
+  const double t2 = u.trans * u.trans;
+  const double min_rot = config.min_rotation_sigma * config.min_rotation_sigma;
+  const double min_trans = config.min_translation_sigma * config.min_translation_sigma;
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  M(0, 0) = std::max(config.alpha1 * r1 * r1 + config.alpha2 * t2, min_rot);
+  M(1, 1) = std::max(config.alpha3 * t2 + config.alpha4 * (r1 * r1 + r2 * r2), min_trans);
+  M(2, 2) = std::max(config.alpha1 * r2 * r2 + config.alpha2 * t2, min_rot);
+  return M;
+}
+
+SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const OdometryMotionConfig& config, Rng& rng) {
+  return sample_odometry_motion(pose, u, control_covariance(u, config).diagonal().cwiseSqrt(), rng);
+}
+
+SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const Eigen::Vector3d& sigmas, Rng& rng) {
+  OdometryControl noisy;  // Table 5.6, lines 5-7
+  noisy.rot1 = u.rot1 - rng.gaussian(0.0, sigmas(0));
+  noisy.trans = u.trans - rng.gaussian(0.0, sigmas(1));
+  noisy.rot2 = u.rot2 - rng.gaussian(0.0, sigmas(2));
+  return apply_odometry(pose, noisy);  // lines 8-10
+}
+
+MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& covariance, const OdometryControl& u,
+                                         const OdometryMotionConfig& config) {
+  Matrix3 G;
+  Matrix3 V;
+  MotionPrediction prediction;
+  prediction.pose = apply_odometry(pose, u, &G, &V);
+  const Eigen::Matrix3d Sigma = G * covariance * G.transpose() + V * control_covariance(u, config) * V.transpose();
+  prediction.covariance = 0.5 * (Sigma + Sigma.transpose());
+  return prediction;
+}
+
+}  // namespace slam2d

@@ -1,0 +1,68 @@
+#pragma once
+// The odometry motion model: S. Thrun, W. Burgard, D. Fox, "Probabilistic Robotics", 2005,
+// Sec. 5.4. The motion between two odometry readings is split into a rotation, a translation and
+// a second rotation (Eq. 5.34 .. 5.36, `decompose_odometry`); each part is perturbed by zero-mean
+// Gaussian noise whose variance grows with the motion, with the four parameters alpha1..alpha4:
+//   var(rot1)  = alpha1 rot1^2 + alpha2 trans^2
+//   var(trans) = alpha3 trans^2 + alpha4 (rot1^2 + rot2^2)
+//   var(rot2)  = alpha1 rot2^2 + alpha2 trans^2
+// `sample_odometry_motion` is Table 5.6 (sample_motion_model_odometry), for particle filters;
+// `predict_odometry_motion` is the EKF's prediction (Table 7.3 in the odometry form): the pose
+// g(x, u) and its covariance G P G^T + V M V^T with G = dg/dx, V = dg/du.
+//
+// Two practical details (as AMCL does): a translation shorter than 1 cm has no rot1 (turning on
+// the spot), and a robot driving backwards has rot1 near +-pi: the noise then scales with the
+// angle to the backward direction, not with the half turn. A small floor on each variance keeps
+// the covariance of a standing robot invertible.
+
+#include <Eigen/Core>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/rng.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct OdometryMotionConfig {
+  double alpha1 = 0.05;   // 1 (rad^2 / rad^2), >= 0: rotation noise from rotation
+  double alpha2 = 0.01;   // rad^2 / m^2, >= 0: rotation noise from translation
+  double alpha3 = 0.05;   // 1 (m^2 / m^2), >= 0: translation noise from translation
+  double alpha4 = 0.01;   // m^2 / rad^2, >= 0: translation noise from rotation
+  double min_rotation_sigma = 1e-3;     // rad, >= 0: floor of the rotation standard deviations
+  double min_translation_sigma = 1e-3;  // m, >= 0: floor of the translation standard deviation
+};
+
+/// Throws Error unless every field is finite and non-negative.
+void validate(const OdometryMotionConfig& config);
+
+/// The control u = (rot1, trans, rot2) between two odometry poses (Eq. 5.34 .. 5.36).
+struct OdometryControl {
+  double rot1 = 0.0;   // rad
+  double trans = 0.0;  // m
+  double rot2 = 0.0;   // rad
+  Eigen::Vector3d vector() const { return {rot1, trans, rot2}; }
+};
+OdometryControl decompose_odometry(const SE2& T_odom_previous, const SE2& T_odom_current);
+
+/// The noise-free motion g(x, u): the pose after applying u at `pose`. J_pose = dg/dx,
+/// J_control = dg/du (u as (rot1, trans, rot2)).
+SE2 apply_odometry(const SE2& pose, const OdometryControl& u, Matrix3* J_pose = nullptr, Matrix3* J_control = nullptr);
+
+/// M: the diagonal covariance of (rot1, trans, rot2) for a control, with the floors.
+Eigen::Matrix3d control_covariance(const OdometryControl& u, const OdometryMotionConfig& config);
+
+/// Table 5.6: a sample of the pose after the control.
+SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const OdometryMotionConfig& config, Rng& rng);
+/// The same with the standard deviations of (rot1, trans, rot2) given (sqrt of the diagonal of
+/// control_covariance), for a particle set moved by one control.
+SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const Eigen::Vector3d& sigmas, Rng& rng);
+
+/// The EKF prediction: g(x, u) and G P G^T + V M V^T.
+struct MotionPrediction {
+  SE2 pose;
+  Covariance3 covariance;
+};
+MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& covariance, const OdometryControl& u,
+                                         const OdometryMotionConfig& config);
+
+}  // namespace slam2d

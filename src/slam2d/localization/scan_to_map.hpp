@@ -1,0 +1,48 @@
+#pragma once
+// Scan-to-map matching for the EKF's measurement: the pose that minimises the squared distances
+// of the scan's end points to the nearest obstacle of the map,
+//   T* = argmin_T sum_i d(T p_i)^2,
+// with d the likelihood field's distance (grid/likelihood_field.hpp: exact EDT, bilinear, with
+// its exact gradient), by Levenberg-Marquardt from the predicted pose (a step is taken only if it
+// lowers the truncated cost sum min(d, outlier_distance)^2, else the damping grows; converged when
+// the step falls below epsilon): the point-to-distance-field form
+// of ICP against the map's points (A. Fitzgibbon, "Robust registration of 2D and 3D point sets",
+// 2003; the distance map replaces the nearest-neighbour search). Points farther than
+// outlier_distance from any obstacle are left out (unmapped objects, glass).
+//
+// The covariance is sigma^2 (J^T J)^-1 at the optimum (the Hessian approximation, as Hector's
+// and Censi's covariance-from-Hessian), with sigma the larger of config.sigma and the RMS
+// residual, so a poor fit widens it. The fraction of end points within inlier_distance of an
+// obstacle after the match is what the EKF's gate uses.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/grid/likelihood_field.hpp"
+
+namespace slam2d {
+
+struct ScanToMapConfig {
+  int max_iterations = 30;        // 1, >= 1
+  double outlier_distance = 0.5;  // m, > 0: points farther from an obstacle do not count
+  double inlier_distance = 0.2;   // m, > 0: points this close after the match are inliers
+  double sigma = 0.05;            // m, > 0: floor of the per-point residual sigma of the covariance
+  double epsilon_xy = 1e-3;       // m: stop when the step is below this ...
+  double epsilon_theta = 1e-3;    // rad: ... and this
+};
+
+struct ScanToMapResult {
+  SE2 T_map_robot;
+  Covariance3 covariance = Covariance3::Identity() * 1e6;
+  bool converged = false;       // the step became small with >= 3 points
+  int iterations = 0;
+  double inlier_fraction = 0.0; // 1, of all points
+  double residual = 0.0;        // m, RMS distance of the points used
+};
+
+ScanToMapResult match_scan_to_map(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
+                                  const SE2& T_map_robot_guess, const ScanToMapConfig& config = {});
+
+}  // namespace slam2d

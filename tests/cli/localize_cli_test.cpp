@@ -1,0 +1,108 @@
+// slam2d localize: a simulated office log localized in the map built from it, from a known start
+// and after a kidnap, the JSON summary's fields, the EKF refusing --global, and bad options
+// giving a message and a non-zero exit without a trajectory.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+using test::CommandResult;
+using test::TempDir;
+using test::json_number;
+using test::run_command;
+
+std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+
+// A 60 s simulated run, its odometry map (the odometry starts at the true start pose, so the
+// map frame is the world frame) and the true start pose as "x,y,theta".
+struct Fixture {
+  TempDir dir;
+  std::string log = dir.file("office.clf");
+  std::string truth = dir.file("truth.txt");
+  std::string map = dir.file("map/map.yaml");
+  std::string start;
+
+  Fixture() {
+    const CommandResult sim = run_command(slam2d("simulate --out " + log + " --truth " + truth + " --duration 60 --seed 3"));
+    EXPECT_EQ(sim.exit_code, 0) << sim.errors;
+    const CommandResult mapped = run_command(slam2d("map " + log + " --method odometry --out " + dir.file("map") + " --quiet"));
+    EXPECT_EQ(mapped.exit_code, 0) << mapped.errors;
+    std::ifstream in(truth);
+    std::string line;
+    while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
+    }
+    double stamp = 0.0, x = 0.0, y = 0.0, theta = 0.0;
+    std::istringstream(line) >> stamp >> x >> y >> theta;
+    start = std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(theta);
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture f;
+  return f;
+}
+
+TEST(LocalizeCli, MclTracksTheSimulatedRunAndReportsItsSummary) {
+  const Fixture& f = fixture();
+  TempDir out;
+  const std::string traj = out.file("mcl.txt");
+  const CommandResult result = run_command(slam2d("localize " + f.log + " --map " + f.map + " --method mcl --initial " +
+                                                  f.start + " --particles 2000 --seed 2 --out " + traj + " --json --quiet"));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  for (const char* key : {"scans", "cpu_s", "us_per_update", "converged_at_s", "lost_events"}) {
+    EXPECT_TRUE(json_number(result.output, key).has_value()) << key << " in " << result.output;
+  }
+  EXPECT_NE(result.output.find("\"method\": \"mcl\""), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("\"recovered_after_s\": null"), std::string::npos) << result.output;
+  EXPECT_EQ(json_number(result.output, "scans").value_or(0), 601.0);
+  EXPECT_LT(json_number(result.output, "converged_at_s").value_or(1e9), 3.0);
+  EXPECT_EQ(json_number(result.output, "lost_events").value_or(-1), 0.0);
+  EXPECT_EQ(test::count_data_lines(traj), 601u);
+  // Against the true trajectory: the absolute error stays small.
+  const CommandResult eval = run_command(slam2d("eval " + traj + " --reference " + f.truth + " --json"));
+  ASSERT_EQ(eval.exit_code, 0) << eval.errors;
+  const auto ate = json_number(eval.output, "ate_rmse");
+  ASSERT_TRUE(ate.has_value()) << eval.output;
+  EXPECT_LT(*ate, 0.15) << eval.output;
+}
+
+TEST(LocalizeCli, EkfAndKidnapReportLostEvents) {
+  const Fixture& f = fixture();
+  TempDir out;
+  const CommandResult result =
+      run_command(slam2d("localize " + f.log + " --map " + f.map + " --method ekf --initial " + f.start +
+                         " --kidnap-at 20 --kidnap-by 5,0,90 --out " + out.file("ekf.txt") + " --json --quiet"));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_GE(json_number(result.output, "lost_events").value_or(0), 1.0) << result.output;
+  EXPECT_NEAR(json_number(result.output, "kidnapped_at_s").value_or(0), 20.0, 0.11) << result.output;
+  EXPECT_NE(result.output.find("\"recovered_after_s\": null"), std::string::npos) << "an EKF does not relocalize";
+}
+
+TEST(LocalizeCli, EkfHasNoGlobalModeAndBadOptionsFail) {
+  const Fixture& f = fixture();
+  TempDir out;
+  const std::string traj = out.file("t.txt");
+  const CommandResult ekf = run_command(slam2d("localize " + f.log + " --map " + f.map + " --method ekf --global --out " + traj));
+  EXPECT_NE(ekf.exit_code, 0);
+  EXPECT_NE(ekf.errors.find("no global mode"), std::string::npos) << ekf.errors;
+  const CommandResult neither = run_command(slam2d("localize " + f.log + " --map " + f.map + " --method mcl --out " + traj));
+  EXPECT_NE(neither.exit_code, 0);
+  EXPECT_NE(neither.errors.find("--initial"), std::string::npos) << neither.errors;
+  const CommandResult bad = run_command(slam2d("localize " + f.log + " --map " + f.map + " --initial 1,2 --out " + traj));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.errors.find("three"), std::string::npos) << bad.errors;
+  const CommandResult no_map = run_command(slam2d("localize " + f.log + " --map " + out.file("none.yaml") + " --global --out " + traj));
+  EXPECT_NE(no_map.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(traj));
+}
+
+}  // namespace
+}  // namespace slam2d

@@ -1,0 +1,184 @@
+// The localization models: the odometry motion model's Jacobians against finite differences, its
+// samples against its covariance, the KLD bound, the beam model's ray casting on a hand-made map,
+// and the scan-to-map matcher recovering a known offset.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/rng.hpp"
+#include "slam2d/localization/localization_map.hpp"
+#include "slam2d/localization/mcl.hpp"
+#include "slam2d/localization/motion_model.hpp"
+#include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/localization/sensor_model.hpp"
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+Eigen::Vector3d difference(const SE2& a, const SE2& b) {
+  return {a.x() - b.x(), a.y() - b.y(), angle_difference(a.theta(), b.theta())};
+}
+
+TEST(OdometryMotionModel, DecomposeThenApplyGivesTheOdometryMotion) {
+  const SE2 previous(1.0, -2.0, 0.3);
+  const SE2 current(1.8, -1.5, 1.2);
+  const OdometryControl u = decompose_odometry(previous, current);
+  EXPECT_NEAR(u.trans, std::hypot(0.8, 0.5), 1e-12);
+  EXPECT_NEAR(u.rot1, std::atan2(0.5, 0.8) - 0.3, 1e-12);
+  EXPECT_TRUE(test::poses_near(apply_odometry(previous, u), current, 1e-12, 1e-12));
+  // From another start pose the same control moves the robot the same way in its own frame.
+  const SE2 other(-3.0, 4.0, -2.0);
+  EXPECT_TRUE(test::poses_near(other.between(apply_odometry(other, u)), previous.between(current), 1e-12, 1e-12));
+}
+
+TEST(OdometryMotionModel, JacobiansMatchFiniteDifferences) {
+  const SE2 pose(0.5, -1.0, 2.5);
+  const OdometryControl u{.rot1 = 0.4, .trans = 0.7, .rot2 = -0.9};
+  Matrix3 J_pose;
+  Matrix3 J_control;
+  const SE2 result = apply_odometry(pose, u, &J_pose, &J_control);
+  const double h = 1e-6;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d dx = Eigen::Vector3d::Zero();
+    dx(j) = h;
+    const SE2 moved = apply_odometry(SE2::from_vector(pose.vector() + dx), u);
+    const Eigen::Vector3d numeric = difference(moved, result) / h;
+    EXPECT_LT((numeric - J_pose.col(j)).norm(), 1e-5) << "state column " << j;
+    Eigen::Vector3d du = u.vector();
+    du(j) += h;
+    const SE2 moved_u = apply_odometry(pose, OdometryControl{du(0), du(1), du(2)});
+    const Eigen::Vector3d numeric_u = difference(moved_u, result) / h;
+    EXPECT_LT((numeric_u - J_control.col(j)).norm(), 1e-5) << "control column " << j;
+  }
+}
+
+TEST(OdometryMotionModel, SampleStatisticsMatchThePredictedCovariance) {
+  const SE2 pose(2.0, 1.0, 0.7);
+  const Covariance3 prior = covariance_from_sigmas(0.05, 0.03, 0.02);
+  const OdometryControl u{.rot1 = 0.2, .trans = 0.5, .rot2 = -0.1};
+  const OdometryMotionConfig config{.alpha1 = 0.02, .alpha2 = 0.01, .alpha3 = 0.02, .alpha4 = 0.01};
+  const MotionPrediction prediction = predict_odometry_motion(pose, prior, u, config);
+  Rng rng(7);
+  const Eigen::Matrix3d L = prior.llt().matrixL();
+  const int n = 40000;
+  std::vector<Eigen::Vector3d> offsets;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d e = L * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
+    const SE2 start = SE2::from_vector(pose.vector() + e);
+    offsets.push_back(difference(sample_odometry_motion(start, u, config, rng), prediction.pose));
+    mean += offsets.back() / n;
+  }
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& d : offsets) covariance += (d - mean) * (d - mean).transpose() / (n - 1);
+  // The mean is the noise-free motion (to first order), the spread the EKF's covariance.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(mean(i), 0.0, 4.0 * std::sqrt(prediction.covariance(i, i) / n) + 2e-3) << i;
+    EXPECT_NEAR(covariance(i, i), prediction.covariance(i, i), 0.05 * prediction.covariance(i, i)) << i;
+  }
+  const double rho_sample = covariance(0, 2) / std::sqrt(covariance(0, 0) * covariance(2, 2));
+  const double rho_model = prediction.covariance(0, 2) / std::sqrt(prediction.covariance(0, 0) * prediction.covariance(2, 2));
+  EXPECT_NEAR(rho_sample, rho_model, 0.03);
+}
+
+TEST(OdometryMotionModel, BackwardDrivingIsNotAHalfTurnOfNoise) {
+  const OdometryMotionConfig config;
+  const SE2 start(0.0, 0.0, 0.0);
+  const OdometryControl backward = decompose_odometry(start, SE2(-0.5, 0.0, 0.0));
+  const OdometryControl forward = decompose_odometry(start, SE2(0.5, 0.0, 0.0));
+  EXPECT_NEAR(std::abs(backward.rot1), std::numbers::pi, 1e-12);
+  EXPECT_TRUE(control_covariance(backward, config).isApprox(control_covariance(forward, config), 1e-12));
+}
+
+TEST(KldSampling, BoundMatchesFoxEquation10) {
+  // k = 100, eps = 0.05, z = 2.326: 99 / 0.1 * (1 - 2/891 + sqrt(2/891) 2.326)^3 = 1346.6.
+  EXPECT_EQ(kld_particle_count(100, 0.05, 2.326), 1347u);
+  EXPECT_EQ(kld_particle_count(1, 0.05, 2.326), 1u);
+  EXPECT_LT(kld_particle_count(10, 0.05, 2.326), kld_particle_count(20, 0.05, 2.326));
+}
+
+// A 10 m x 10 m room at 0.1 m: walls on the border cells, free inside.
+OccupancyMap room() {
+  OccupancyMap map;
+  map.resolution = 0.1;
+  map.origin = SE2(-5.0, -5.0, 0.0);
+  map.width = 100;
+  map.height = 100;
+  map.cells.assign(100 * 100, OccupancyMap::kFree);
+  for (int i = 0; i < 100; ++i) {
+    map.at(i, 0) = map.at(i, 99) = map.at(0, i) = map.at(99, i) = OccupancyMap::kOccupied;
+  }
+  return map;
+}
+
+TEST(BeamModel, RayCastingHitsTheWalls) {
+  const OccupancyMap map = room();
+  // From the centre the east wall cell (99) has its centre at x = 4.95.
+  EXPECT_NEAR(cast_ray(map, {0.0, 0.0}, 0.0, 20.0), 4.95, 0.06);
+  EXPECT_NEAR(cast_ray(map, {1.0, 2.0}, std::numbers::pi / 2, 20.0), 2.95, 0.06);
+  EXPECT_NEAR(cast_ray(map, {0.0, 0.0}, 0.0, 3.0), 3.0, 1e-12);  // nothing within the range
+}
+
+LaserScan scan_in_room(const OccupancyMap& map, const SE2& pose, int beams) {
+  LaserScan scan;
+  scan.angle_min = -std::numbers::pi / 2;
+  scan.angle_increment = std::numbers::pi / (beams - 1);
+  scan.range_max = 20.0;
+  for (int i = 0; i < beams; ++i) scan.ranges.push_back(cast_ray(map, pose.translation(), pose.theta() + scan.angle(i), 20.0));
+  return scan;
+}
+
+TEST(BeamModel, TheTruePoseScoresBestAndMaxRangeReadingsCount) {
+  const OccupancyMap map = room();
+  const SE2 truth(1.0, -0.5, 0.3);
+  const ScanBeams beams = select_beams(scan_in_room(map, truth, 181), 60, 30.0);
+  EXPECT_EQ(beams.ranges.size(), 60u);
+  const BeamModelConfig config;
+  const double best = beam_model_log_likelihood(map, beams, truth, config);
+  for (const SE2& offset : {SE2(0.3, 0.0, 0.0), SE2(0.0, -0.3, 0.0), SE2(0.0, 0.0, 0.1)}) {
+    EXPECT_GT(best, beam_model_log_likelihood(map, beams, truth * offset, config) + 5.0);
+  }
+  // A scan whose beams all read max range: likelier where nothing is in range than facing a wall.
+  LaserScan empty = scan_in_room(map, truth, 31);
+  for (double& r : empty.ranges) r = empty.range_max;
+  const ScanBeams none = select_beams(empty, 30, 4.0);
+  EXPECT_TRUE(none.points_robot.empty());
+  EXPECT_EQ(none.ranges.size(), 30u);
+  EXPECT_GT(beam_model_log_likelihood(map, none, SE2(0.0, 0.0, 0.0), config),
+            beam_model_log_likelihood(map, none, SE2(3.5, 0.0, 0.0), config));
+}
+
+TEST(LikelihoodFieldModel, TheTruePoseScoresBestAndPlausibilityIsOne) {
+  const LocalizationMap map(room());
+  const SE2 truth(1.0, -0.5, 0.3);
+  const ScanBeams beams = select_beams(scan_in_room(map.map(), truth, 181), 60, 30.0);
+  const double best = map.scan_log_likelihood(beams.points_robot, truth);
+  for (const SE2& offset : {SE2(0.3, 0.0, 0.0), SE2(0.0, -0.3, 0.0), SE2(0.0, 0.0, 0.1)}) {
+    EXPECT_GT(best, map.scan_log_likelihood(beams.points_robot, truth * offset) + 5.0);
+  }
+  EXPECT_DOUBLE_EQ(map.plausibility(beams.points_robot, truth, 0.2), 1.0);
+  EXPECT_LT(map.plausibility(beams.points_robot, truth * SE2(0.0, 0.0, 0.5), 0.2), 0.5);
+  // Free-pose samples stand in free cells.
+  Rng rng(3);
+  for (int i = 0; i < 100; ++i) EXPECT_TRUE(map.is_free(map.sample_free_pose(rng).translation()));
+}
+
+TEST(ScanToMap, RecoversAKnownOffset) {
+  const LocalizationMap map(room());
+  const SE2 truth(1.0, -0.5, 0.3);
+  const ScanBeams beams = select_beams(scan_in_room(map.map(), truth, 361), 120, 30.0);
+  const ScanToMapResult result = match_scan_to_map(map.field(), beams.points_robot, truth * SE2(0.15, -0.1, 0.05));
+  EXPECT_TRUE(result.converged);
+  EXPECT_TRUE(test::poses_near(result.T_map_robot, truth, 0.03, 0.01)) << result.T_map_robot;
+  EXPECT_GT(result.inlier_fraction, 0.95);
+  EXPECT_LT(std::sqrt(result.covariance(0, 0)), 0.05);
+}
+
+}  // namespace
+}  // namespace slam2d
