@@ -24,6 +24,11 @@ void add_map_command(CLI::App& app) {
   command->add_option("--levels", options->levels, "hector: map pyramid levels")
       ->check(CLI::Range(1, 16))
       ->capture_default_str();
+  command->add_option("--particles", options->particles, "rbpf: number of particles")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  command->add_option("--seed", options->seed, "rbpf: random seed (same log and seed give the same result)")
+      ->capture_default_str();
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

@@ -18,6 +18,7 @@
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
+#include "slam2d/slam/rbpf/rbpf_slam.hpp"
 
 namespace slam2d::cli {
 
@@ -114,6 +115,27 @@ MappingRun map_with_graph(const MapJobOptions& options) {
   return run;
 }
 
+// Rao-Blackwellized particle filter (slam/rbpf, GMapping-class): the trajectory is the best
+// particle's path, one pose per scan (scans between updates follow the scan-matched odometry).
+MappingRun map_with_rbpf(const MapJobOptions& options) {
+  check(!options.no_odometry, "map: the rbpf method needs odometry (drop --no-odometry)");
+  RbpfConfig config;
+  config.particles = options.particles;
+  config.seed = options.seed;
+  config.map.grid.resolution = options.resolution;
+  RbpfSlam slam(config);
+  MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
+    return slam.add_scan(laser.scan, laser.odom_pose).T_map_robot;
+  });
+  run.trajectory = slam.trajectory();
+  run.map = slam.map().to_occupancy_map();
+  const RbpfStats& stats = slam.stats();
+  run.method_summary.add("particles", options.particles).add("seed", static_cast<std::size_t>(options.seed));
+  run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
+  run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
+  return run;
+}
+
 std::vector<SE2> poses_of(const Trajectory& trajectory) {
   std::vector<SE2> poses;
   poses.reserve(trajectory.size());
@@ -133,20 +155,22 @@ void write_outputs(const std::filesystem::path& dir, const MappingRun& run, cons
 MappingRun run_method(const MapJobOptions& options) {
   if (options.method == "hector") return map_with_hector(options);
   if (options.method == "graph") return map_with_graph(options);
+  if (options.method == "rbpf") return map_with_rbpf(options);
   return map_with_odometry(options);
 }
 
 }  // namespace
 
 const std::vector<std::string>& map_methods() {
-  static const std::vector<std::string> methods{"odometry", "hector", "graph"};
+  static const std::vector<std::string> methods{"odometry", "hector", "graph", "rbpf"};
   return methods;
 }
 
 MapJobResult run_map_job(const MapJobOptions& options) {
   const auto& methods = map_methods();
   check(std::find(methods.begin(), methods.end(), options.method) != methods.end(),
-        "map: unknown method '" + options.method + "' (known: odometry, hector, graph)");
+        "map: unknown method '" + options.method + "' (known: odometry, hector, graph, rbpf)");
+  check(options.particles >= 1 && options.particles <= 10000, "map: --particles must be in [1, 10000]");
   check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
   check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
   check(!options.range_max || *options.range_max > 0.0, "map: --range-max must be positive");

@@ -2,6 +2,7 @@
 // The mapping job behind `slam2d map` (and `slam2d demo`): read a log, estimate the trajectory
 // with the chosen method, build the occupancy grid, write the outputs.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -14,10 +15,12 @@ namespace slam2d::cli {
 struct MapJobOptions {
   std::string log;                  // CARMEN log, plain or .gz
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
-  std::string method = "odometry";  // odometry, hector, graph
+  std::string method = "odometry";  // odometry, hector, graph, rbpf
   double resolution = 0.05;         // m per cell
   bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
   int levels = 3;                   // hector: map pyramid levels, in [1, 16]
+  int particles = 30;               // rbpf: number of particles, in [1, 10000]
+  std::uint64_t seed = 1;           // rbpf: seed of every random draw (same log + seed, same result)
   bool quiet = false;               // no progress line
   std::optional<double> range_max;  // m; FLASER/RLASER readings at or above are no-return (default: PARAM, else 80)
 };

@@ -1,0 +1,175 @@
+#include "slam2d/slam/rbpf/proposal.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/grid/bilinear.hpp"
+
+namespace slam2d {
+
+namespace {
+
+bool positive(double value) { return std::isfinite(value) && value > 0.0; }
+bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
+
+// The tangent coordinates of x in the frame of `origin`: (x, y) of origin^-1 x and its angle.
+Eigen::Vector3d local_coordinates(const SE2& origin, const SE2& x) {
+  const SE2 d = origin.between(x);
+  return {d.x(), d.y(), normalize_angle(d.theta())};
+}
+
+SE2 from_local(const SE2& origin, const Eigen::Vector3d& v) { return origin * SE2(v.x(), v.y(), v.z()); }
+
+}  // namespace
+
+void validate(const RbpfMotionNoise& noise) {
+  check(non_negative(noise.srr) && non_negative(noise.srt) && non_negative(noise.str) && non_negative(noise.stt),
+        "RbpfMotionNoise: srr, srt, str, stt must be finite and >= 0");
+  check(positive(noise.min_sigma_translation) && positive(noise.min_sigma_rotation),
+        "RbpfMotionNoise: the sigma floors must be positive");
+}
+
+void validate(const RbpfProposalConfig& config) {
+  validate(config.matcher);
+  check(positive(config.likelihood_sigma), "RbpfProposalConfig: likelihood_sigma must be positive");
+  check(config.weight_gain > 0.0 && config.weight_gain <= 1.0, "RbpfProposalConfig: weight_gain must be in (0, 1]");
+  check(non_negative(config.motion_prior_weight), "RbpfProposalConfig: motion_prior_weight must be finite and >= 0");
+  check(config.sample_radius >= 1 && config.sample_radius <= 5, "RbpfProposalConfig: sample_radius must be in [1, 5]");
+  check(positive(config.sample_step_translation) && positive(config.sample_step_rotation),
+        "RbpfProposalConfig: sample steps must be positive");
+  check(config.max_match_residual > 0.0 && config.max_match_residual <= 1.0,
+        "RbpfProposalConfig: max_match_residual must be in (0, 1]");
+  check(positive(config.max_match_translation) && positive(config.max_match_rotation),
+        "RbpfProposalConfig: match gates must be positive");
+}
+
+Eigen::Vector3d motion_sigmas(const SE2& u, const RbpfMotionNoise& noise) {
+  const double d = u.translation().norm();
+  const double a = std::abs(normalize_angle(u.theta()));
+  const double sigma_t = std::max(noise.min_sigma_translation, noise.srr * d + noise.srt * a);
+  const double sigma_r = std::max(noise.min_sigma_rotation, noise.str * d + noise.stt * a);
+  return {sigma_t, sigma_t, sigma_r};
+}
+
+double log_motion_density(const SE2& x, const SE2& predicted, const Eigen::Vector3d& sigmas) {
+  const Eigen::Vector3d e = local_coordinates(predicted, x).cwiseQuotient(sigmas);
+  const double log_norm = -1.5 * std::log(2.0 * std::numbers::pi) - std::log(sigmas.prod());
+  return log_norm - 0.5 * e.squaredNorm();
+}
+
+double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                  const SE2& T_map_robot, double sigma) {
+  const double c = std::cos(T_map_robot.theta());
+  const double s = std::sin(T_map_robot.theta());
+  const Eigen::Vector2d& t = T_map_robot.translation();
+  double sum = 0.0;
+  for (const Eigen::Vector2d& p : points_robot) {
+    const Eigen::Vector2d S(c * p.x() - s * p.y() + t.x(), s * p.x() + c * p.y() + t.y());
+    const double r = 1.0 - interpolate_occupancy(grid, S).value;
+    sum += r * r;
+  }
+  return -sum / (2.0 * sigma * sigma);
+}
+
+ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen::Vector2d>& points_robot,
+                                 const SE2& predicted, const Eigen::Vector3d& sigmas, const RbpfProposalConfig& config,
+                                 bool fit) {
+  ProposalResult result;
+  result.x_star = predicted;
+  if (map.level(0).scan_count() == 0 || points_robot.size() < config.min_points) return result;
+  // x* = argmax p(z | m, x), from x'.
+  // The matcher maximises p(z | m, x) p(x | x_{t-1}, u) (the proposal's mode): the motion model
+  // enters as a Gaussian prior in Hector's cost units (cost = 0.5 sum r^2 = sigma^2 (-log L)),
+  // so it only decides the directions the scan leaves open (a corridor's axis).
+  const double c = std::cos(predicted.theta());
+  const double s = std::sin(predicted.theta());
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  R.topLeftCorner<2, 2>() << c, -s, s, c;
+  const Eigen::Vector3d inverse_variances = sigmas.cwiseProduct(sigmas).cwiseInverse();
+  const PosePrior prior{.mean = predicted,
+                        .information = config.motion_prior_weight * config.likelihood_sigma * config.likelihood_sigma *
+                                       R * inverse_variances.asDiagonal() * R.transpose()};
+  const HectorMatchResult match = match_scan_to_pyramid(map, points_robot, predicted, config.matcher,
+                                                        config.motion_prior_weight > 0.0 ? std::optional(prior) : std::nullopt);
+  const Eigen::Vector3d correction = local_coordinates(predicted, match.T_map_robot);
+  if (match.degenerate || match.mean_squared_residual > config.max_match_residual ||
+      correction.head<2>().norm() > config.max_match_translation || std::abs(correction.z()) > config.max_match_rotation) {
+    return result;
+  }
+  result.x_star = match.T_map_robot;
+  if (!fit) {
+    result.matched = true;
+    return result;
+  }
+  // tau_j at the grid of poses around x*, Eq. (14)-(15); weights relative to the largest.
+  const int k = config.sample_radius;
+  const int side = 2 * k + 1;
+  std::vector<Eigen::Vector3d> v;
+  std::vector<double> log_tau;
+  v.reserve(static_cast<std::size_t>(side * side * side));
+  log_tau.reserve(v.capacity());
+  const OccupancyGrid& grid = map.level(0);
+  for (int ix = -k; ix <= k; ++ix) {
+    for (int iy = -k; iy <= k; ++iy) {
+      for (int it = -k; it <= k; ++it) {
+        const Eigen::Vector3d vj(ix * config.sample_step_translation, iy * config.sample_step_translation,
+                                 it * config.sample_step_rotation);
+        const SE2 xj = from_local(result.x_star, vj);
+        v.push_back(vj);
+        log_tau.push_back(log_observation_likelihood(grid, points_robot, xj, config.likelihood_sigma) +
+                          log_motion_density(xj, predicted, sigmas));
+      }
+    }
+  }
+  double max_log = log_tau.front();
+  for (const double l : log_tau) max_log = std::max(max_log, l);
+  double eta = 0.0;  // Eq. (18), scaled by exp(-max_log)
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < v.size(); ++j) {
+    const double tau = std::exp(log_tau[j] - max_log);
+    eta += tau;
+    mean += tau * v[j];  // Eq. (16)
+  }
+  mean /= eta;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < v.size(); ++j) {
+    const Eigen::Vector3d d = v[j] - mean;
+    covariance += std::exp(log_tau[j] - max_log) * d * d.transpose();  // Eq. (17)
+  }
+  covariance /= eta;
+  // Floor: a peaked likelihood puts all the mass on one grid pose; its spread is then below the
+  // grid step, not zero.
+  const double floor_t = config.sample_step_translation / std::sqrt(12.0);
+  const double floor_r = config.sample_step_rotation / std::sqrt(12.0);
+  covariance.diagonal() += Eigen::Vector3d(floor_t * floor_t, floor_t * floor_t, floor_r * floor_r) * 0.25;
+  const double cell_volume =
+      config.sample_step_translation * config.sample_step_translation * config.sample_step_rotation;
+  result.mean = mean;
+  result.covariance = covariance;
+  result.log_normalizer = max_log + std::log(eta * cell_volume);
+  result.matched = true;
+  return result;
+}
+
+SE2 sample_pose(const ProposalResult& proposal, const MapPyramid& map, const std::vector<Eigen::Vector2d>& points_robot,
+                const SE2& predicted, const Eigen::Vector3d& sigmas, const RbpfProposalConfig& config, Rng& rng,
+                double& log_weight_factor) {
+  const Eigen::Vector3d n(rng.gaussian(), rng.gaussian(), rng.gaussian());
+  if (proposal.matched) {
+    const Eigen::Matrix3d L = proposal.covariance.llt().matrixL();
+    log_weight_factor = config.weight_gain * proposal.log_normalizer;
+    return from_local(proposal.x_star, proposal.mean + L * n);
+  }
+  // Fallback: the motion model p(x | x_{t-1}, u); weight p(z | m, x) (0 before the first scan).
+  const SE2 x = from_local(predicted, sigmas.cwiseProduct(n));
+  log_weight_factor = map.level(0).scan_count() == 0
+                          ? 0.0
+                          : config.weight_gain *
+                                log_observation_likelihood(map.level(0), points_robot, x, config.likelihood_sigma);
+  return x;
+}
+
+}  // namespace slam2d

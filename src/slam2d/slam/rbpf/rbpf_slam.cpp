@@ -1,0 +1,198 @@
+#include "slam2d/slam/rbpf/rbpf_slam.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/slam/rbpf/resampling.hpp"
+
+namespace slam2d {
+
+namespace {
+
+bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
+
+MapPyramidConfig map_config(const RbpfConfig& config) {
+  MapPyramidConfig map = config.map;
+  map.grid.max_range = config.max_range;
+  return map;
+}
+
+// Independent streams: one per (update, particle), one per update for the resampler (particle = N).
+Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
+  return Rng(mix_seed(mix_seed(seed) ^ mix_seed((static_cast<std::uint64_t>(update) << 20) ^ particle)));
+}
+
+}  // namespace
+
+void validate(const RbpfConfig& config) {
+  check(config.particles >= 1 && config.particles <= 10000, "RbpfConfig: particles must be in [1, 10000]");
+  check(non_negative(config.min_range) && std::isfinite(config.max_range) && config.max_range > config.min_range,
+        "RbpfConfig: need 0 <= min_range < max_range");
+  check(non_negative(config.update_distance) && non_negative(config.update_angle) &&
+            non_negative(config.update_interval),
+        "RbpfConfig: update thresholds must be finite and >= 0");
+  check(non_negative(config.scan_odometry_prior_weight), "RbpfConfig: scan_odometry_prior_weight must be finite and >= 0");
+  check(config.resample_threshold >= 0.0 && config.resample_threshold <= 1.0,
+        "RbpfConfig: resample_threshold must be in [0, 1]");
+  validate(config.proposal);
+  validate(config.motion);
+}
+
+RbpfPathNode::~RbpfPathNode() {
+  // Unlink the chain while this node holds its parent's last reference, so that destroying a path
+  // of a million nodes does not recurse a million deep.
+  std::shared_ptr<RbpfPathNode> next = std::move(parent);
+  while (next && next.use_count() == 1) next = std::move(next->parent);
+}
+
+RbpfSlam::RbpfSlam(const RbpfConfig& config) : config_(config) {
+  validate(config_);
+  particles_.reserve(static_cast<std::size_t>(config_.particles));
+  const MapPyramid empty_map(map_config(config_));
+  for (int i = 0; i < config_.particles; ++i) {
+    RbpfParticle particle{.T_map_robot = SE2(), .map = empty_map, .path = nullptr};
+    particles_.push_back(std::move(particle));
+  }
+  stats_.neff_min = config_.particles;
+  last_neff_ = config_.particles;
+}
+
+bool RbpfSlam::needs_update(const SE2& T_odom_robot, double stamp) const {
+  if (update_odometry_.empty()) return true;
+  const SE2 u = update_odometry_.back().between(T_odom_robot);
+  return u.translation().norm() > config_.update_distance || std::abs(normalize_angle(u.theta())) > config_.update_angle ||
+         (config_.update_interval > 0.0 && stamp - last_update_stamp_ > config_.update_interval);
+}
+
+void RbpfSlam::initialise(const LaserScan& scan, const SE2& T_odom_robot) {
+  // Every particle starts at the first odometry pose with the first scan in its map.
+  MapPyramid map(map_config(config_));
+  map.integrate_scan(scan, T_odom_robot);
+  auto node = std::make_shared<RbpfPathNode>(T_odom_robot, 0, nullptr);
+  for (RbpfParticle& particle : particles_) {
+    particle.T_map_robot = T_odom_robot;
+    particle.map = map;  // shares every tile
+    particle.path = node;
+  }
+}
+
+void RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points,
+                               const SE2& u) {
+  RbpfParticle& particle = particles_[i];
+  Rng rng = stream(config_.seed, stats_.updates, i);
+  const SE2 predicted = particle.T_map_robot * u;
+  const Eigen::Vector3d sigmas = motion_sigmas(u, config_.motion);
+  const ProposalResult proposal = improved_proposal(particle.map, points, predicted, sigmas, config_.proposal);
+  double log_factor = 0.0;
+  particle.T_map_robot = sample_pose(proposal, particle.map, points, predicted, sigmas, config_.proposal, rng, log_factor);
+  particle.log_weight += log_factor;  // Eq. (19): w_t = w_{t-1} eta
+  particle.accumulated_log_weight += log_factor;
+  if (!proposal.matched) ++stats_.fallbacks;
+  particle.map.integrate_scan(scan, particle.T_map_robot);
+  particle.path = std::make_shared<RbpfPathNode>(particle.T_map_robot, stats_.updates, std::move(particle.path));
+}
+
+bool RbpfSlam::resample_if_needed() {
+  std::vector<double> log_weights;
+  log_weights.reserve(particles_.size());
+  for (const RbpfParticle& particle : particles_) log_weights.push_back(particle.log_weight);
+  const std::vector<double> weights = normalized_weights(log_weights);
+  last_neff_ = effective_sample_size(weights);  // Eq. (20)
+  stats_.neff_min = std::min(stats_.neff_min, last_neff_);
+  if (last_neff_ >= config_.resample_threshold * static_cast<double>(particles_.size())) {
+    // Keep the weights bounded: shift so that the largest log weight is 0.
+    const double max_log = *std::max_element(log_weights.begin(), log_weights.end());
+    for (RbpfParticle& particle : particles_) particle.log_weight -= max_log;
+    return false;
+  }
+  Rng rng = stream(config_.seed, stats_.updates, particles_.size());
+  const std::vector<std::size_t> drawn = low_variance_resample(weights, rng);
+  std::vector<RbpfParticle> next;
+  next.reserve(particles_.size());
+  for (const std::size_t index : drawn) {
+    next.push_back(particles_[index]);  // copies the tile tables, shares the tiles and the path
+    next.back().log_weight = 0.0;
+  }
+  particles_ = std::move(next);
+  ++stats_.resamplings;
+  return true;
+}
+
+SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot) {
+  const SE2 delta = last_raw_odometry_.between(T_odom_robot);
+  SE2 corrected = last_corrected_odometry_ * delta;
+  if (config_.scan_matched_odometry) {
+    // The previous scan's pose in the best particle's map, the prediction, the match.
+    const RbpfParticle& particle = best();
+    const SE2 previous = particle.T_map_robot * update_odometry_.back().between(last_corrected_odometry_);
+    const SE2 predicted = previous * delta;
+    const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
+    RbpfProposalConfig matching = config_.proposal;
+    matching.motion_prior_weight = config_.scan_odometry_prior_weight;
+    const ProposalResult match =
+        improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion), matching, /*fit=*/false);
+    if (match.matched) corrected = last_corrected_odometry_ * previous.between(match.x_star);
+  }
+  last_raw_odometry_ = T_odom_robot;
+  last_corrected_odometry_ = corrected;
+  return corrected;
+}
+
+RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
+  RbpfStep step;
+  if (scans_.empty()) {
+    last_raw_odometry_ = wheel_odometry;
+    last_corrected_odometry_ = wheel_odometry;
+  }
+  const SE2 T_odom_robot = scans_.empty() ? wheel_odometry : corrected_odometry(scan, wheel_odometry);
+  if (scans_.empty()) {
+    initialise(scan, T_odom_robot);
+    update_odometry_.push_back(T_odom_robot);
+    last_update_stamp_ = scan.stamp;
+    stats_.updates = 1;
+    step.updated = true;
+  } else if (needs_update(T_odom_robot, scan.stamp)) {
+    const SE2 u = update_odometry_.back().between(T_odom_robot);
+    const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
+    for (std::size_t i = 0; i < particles_.size(); ++i) update_particle(i, scan, points, u);
+    update_odometry_.push_back(T_odom_robot);
+    last_update_stamp_ = scan.stamp;
+    step.resampled = resample_if_needed();
+    ++stats_.updates;
+    step.updated = true;
+  }
+  scans_.push_back({scan.stamp, T_odom_robot, stats_.updates - 1});
+  ++stats_.scans;
+  const RbpfParticle& best_particle = best();
+  step.T_map_robot = best_particle.T_map_robot * update_odometry_.back().between(T_odom_robot);
+  step.neff = last_neff_;
+  return step;
+}
+
+std::size_t RbpfSlam::best_index() const {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < particles_.size(); ++i) {
+    if (particles_[i].accumulated_log_weight > particles_[best].accumulated_log_weight) best = i;
+  }
+  return best;
+}
+
+Trajectory RbpfSlam::trajectory() const {
+  Trajectory trajectory;
+  if (scans_.empty()) return trajectory;
+  std::vector<SE2> update_pose(update_odometry_.size());
+  for (const RbpfPathNode* node = best().path.get(); node != nullptr; node = node->parent.get()) {
+    update_pose[node->update] = node->T_map_robot;
+  }
+  trajectory.reserve(scans_.size());
+  for (const ScanRecord& record : scans_) {
+    const SE2 u = update_odometry_[record.update].between(record.T_odom_robot);
+    trajectory.push_back(record.stamp, update_pose[record.update] * u);
+  }
+  return trajectory;
+}
+
+}  // namespace slam2d

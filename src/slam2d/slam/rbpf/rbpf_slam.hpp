@@ -1,0 +1,143 @@
+#pragma once
+// Rao-Blackwellized particle filter SLAM (GMapping-class): G. Grisetti, C. Stachniss, W. Burgard,
+// "Improved techniques for grid mapping with Rao-Blackwellized particle filters", IEEE T-RO 23(1),
+// 2007; K. Murphy, "Bayesian map learning in dynamic environments", NIPS 1999 (the factorisation).
+//
+// p(x_1:t, m | z_1:t, u_1:t-1) = p(m | x_1:t, z_1:t) p(x_1:t | z_1:t, u_1:t-1)          Eq. (1)
+// Each particle carries a pose, a weight, its path (a tree of nodes shared with the particles it
+// was copied from) and its own occupancy map pyramid (copy-on-write tiles, grid/tiled_grid.hpp:
+// particles copied by resampling share every tile until one of them writes into it).
+//
+// Every scan is first matched against the best particle's map (scan-matched odometry, an
+// addition: see docs/methods/rbpf.md). One update, when that odometry moved more than update_distance / update_angle since the last
+// one (or update_interval passed): for every particle, the improved proposal (proposal.hpp) and
+// its weight (Eq. 19), the map update at the drawn pose; then N_eff (Eq. 20) and low-variance
+// resampling when N_eff < resample_threshold N (selective resampling, Sec. IV-B).
+//
+// Deterministic: particle i at update k draws from its own generator seeded from (seed, k, i),
+// the resampler from (seed, k), so the result depends only on the log and the seed.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/core/trajectory.hpp"
+#include "slam2d/grid/map_pyramid.hpp"
+#include "slam2d/slam/rbpf/proposal.hpp"
+
+namespace slam2d {
+
+struct RbpfConfig {
+  int particles = 30;              // N, in [1, 10000]
+  std::uint64_t seed = 1;          // of every random draw
+  // The particles' maps: Hector's pyramid (3 levels from 5 cm, p_hit 0.9, p_miss 0.4, no clearing
+  // by no-return beams); grid.max_range is replaced by max_range below.
+  MapPyramidConfig map{.levels = 3,
+                       .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4,
+                                .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0}};
+  RbpfProposalConfig proposal{};
+  RbpfMotionNoise motion{};
+  double min_range = 0.1;          // m, shorter readings are dropped
+  double max_range = 25.0;         // m, usable range for matching and mapping
+  double update_distance = 0.5;    // m, odometry distance that triggers an update (GMapping: linearUpdate)
+  double update_angle = 0.25;      // rad, odometry rotation that triggers one (GMapping: angularUpdate)
+  double update_interval = 0.0;    // s, time that triggers one; 0 disables (GMapping: temporalUpdate)
+  double resample_threshold = 0.5; // 1, resample when N_eff < this * N, in [0, 1]
+  // Scan-matched odometry (not in the paper): every scan is matched against the best particle's
+  // map from the odometry prediction, and the matched motions replace the wheel odometry as the
+  // filter's motion input u and between updates. Wheel odometry that is wrong over a few scans
+  // (FR079) then no longer decides the prediction of a whole update step. One match per scan.
+  bool scan_matched_odometry = true;
+  // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight):
+  // weak, since wheel odometry can be wrong by 0.2 m over one scan (FR079).
+  double scan_odometry_prior_weight = 0.05;  // 1, >= 0
+};
+
+/// Throws Error for settings outside the documented ranges.
+void validate(const RbpfConfig& config);
+
+/// A node of a particle's path: the pose at one update, linked to the node of the previous one.
+/// Nodes are shared by the particles that descend from one particle (GMapping's trajectory tree).
+struct RbpfPathNode {
+  SE2 T_map_robot;
+  std::size_t update = 0;  // the update's number, from 0
+  std::shared_ptr<RbpfPathNode> parent;
+  RbpfPathNode(const SE2& pose, std::size_t update_index, std::shared_ptr<RbpfPathNode> previous)
+      : T_map_robot(pose), update(update_index), parent(std::move(previous)) {}
+  ~RbpfPathNode();  // releases a long chain iteratively (no deep recursion)
+  RbpfPathNode(const RbpfPathNode&) = delete;
+  RbpfPathNode& operator=(const RbpfPathNode&) = delete;
+};
+
+struct RbpfParticle {
+  SE2 T_map_robot;
+  double log_weight = 0.0;              // since the last resampling (normalised to max 0)
+  double accumulated_log_weight = 0.0;  // over the whole history, inherited on resampling: picks the best particle
+  MapPyramid map;
+  std::shared_ptr<RbpfPathNode> path;
+};
+
+struct RbpfStats {
+  std::size_t scans = 0;
+  std::size_t updates = 0;
+  std::size_t resamplings = 0;
+  std::size_t fallbacks = 0;    // particle updates that used the motion model (match rejected)
+  double neff_min = 0.0;        // the smallest N_eff seen at an update (N before any)
+};
+
+struct RbpfStep {
+  SE2 T_map_robot;         // the best particle's pose at the last update composed with the odometry since
+  bool updated = false;    // this scan triggered an update
+  bool resampled = false;
+  double neff = 0.0;       // after this update (or the last one)
+};
+
+class RbpfSlam {
+ public:
+  explicit RbpfSlam(const RbpfConfig& config = {});
+
+  /// Processes one scan with the wheel-odometry pose at its stamp (refined by scan matching first
+  /// when config.scan_matched_odometry).
+  RbpfStep add_scan(const LaserScan& scan, const SE2& wheel_odometry);
+
+  /// The best particle (largest accumulated weight; the lowest index on ties).
+  std::size_t best_index() const;
+  const RbpfParticle& best() const { return particles_[best_index()]; }
+  /// The best particle's path, one pose per scan added: at each update its pose there, between
+  /// updates that pose composed with the odometry motion since.
+  Trajectory trajectory() const;
+  /// The best particle's finest map level.
+  const OccupancyGrid& map() const { return best().map.level(0); }
+  const std::vector<RbpfParticle>& particles() const { return particles_; }
+  const RbpfStats& stats() const { return stats_; }
+  const RbpfConfig& config() const { return config_; }
+
+ private:
+  bool needs_update(const SE2& T_odom_robot, double stamp) const;
+  void initialise(const LaserScan& scan, const SE2& T_odom_robot);
+  void update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u);
+  bool resample_if_needed();
+
+  struct ScanRecord {
+    double stamp = 0.0;
+    SE2 T_odom_robot;
+    std::size_t update = 0;  // the last update at or before this scan
+  };
+
+  SE2 corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot);
+
+  RbpfConfig config_;
+  SE2 last_raw_odometry_;        // wheel odometry at the previous scan
+  SE2 last_corrected_odometry_;  // scan-matched odometry at the previous scan
+  std::vector<RbpfParticle> particles_;
+  std::vector<ScanRecord> scans_;
+  std::vector<SE2> update_odometry_;  // odometry pose at each update
+  double last_update_stamp_ = 0.0;
+  double last_neff_ = 0.0;
+  RbpfStats stats_;
+};
+
+}  // namespace slam2d

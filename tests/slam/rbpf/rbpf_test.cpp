@@ -1,0 +1,210 @@
+// Rao-Blackwellized particle filter SLAM: N_eff and low-variance resampling against hand-computed
+// cases, the proposal's densities, one particle on a noiseless simulator reducing to scan
+// matching, determinism, copy-on-write map sharing, and the simulated office loop closed with 30
+// particles.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/eval/ate.hpp"
+#include "slam2d/sim/simulator.hpp"
+#include "slam2d/slam/rbpf/rbpf_slam.hpp"
+#include "slam2d/slam/rbpf/resampling.hpp"
+
+namespace slam2d {
+namespace {
+
+Trajectory odometry_of(const SimulatedRun& run) {
+  Trajectory odometry;
+  for (const LaserMessage* laser : laser_messages(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
+  return odometry;
+}
+
+RbpfSlam run_rbpf(const SimulatedRun& run, const RbpfConfig& config) {
+  RbpfSlam slam(config);
+  for (const LaserMessage* laser : laser_messages(run)) slam.add_scan(laser->scan, laser->odom_pose);
+  return slam;
+}
+
+TEST(Resampling, EffectiveSampleSizeOfHandCases) {
+  EXPECT_DOUBLE_EQ(effective_sample_size({0.25, 0.25, 0.25, 0.25}), 4.0);
+  EXPECT_DOUBLE_EQ(effective_sample_size({1.0, 0.0, 0.0, 0.0}), 1.0);
+  EXPECT_NEAR(effective_sample_size({0.5, 0.25, 0.25, 0.0}), 1.0 / 0.375, 1e-12);  // 1 / (1/4 + 1/16 + 1/16)
+  EXPECT_THROW(effective_sample_size({}), Error);
+}
+
+TEST(Resampling, NormalizesLogWeightsOfAnyMagnitude) {
+  for (const double offset : {0.0, -1000.0, 1000.0}) {
+    const std::vector<double> w = normalized_weights({offset, offset + std::log(3.0)});
+    EXPECT_NEAR(w[0], 0.25, 1e-12);
+    EXPECT_NEAR(w[1], 0.75, 1e-12);
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(normalized_weights({-inf, 0.0}), (std::vector<double>{0.0, 1.0}));
+  EXPECT_EQ(normalized_weights({-inf, -inf}), (std::vector<double>{0.5, 0.5}));
+  EXPECT_THROW(normalized_weights({std::nan(""), 0.0}), Error);
+}
+
+TEST(Resampling, LowVarianceMatchesHandComputedDraws) {
+  // Pointers 0.125, 0.375, 0.625, 0.875 over the cumulative weights 0.1, 0.3, 0.6, 1.0.
+  const std::vector<double> weights{0.1, 0.2, 0.3, 0.4};
+  EXPECT_EQ(low_variance_resample(weights, 0.125), (std::vector<std::size_t>{1, 2, 3, 3}));
+  // Pointers 0.01, 0.26, 0.51, 0.76.
+  EXPECT_EQ(low_variance_resample(weights, 0.01), (std::vector<std::size_t>{0, 1, 2, 3}));
+  // Equal weights keep every particle once, whatever r.
+  EXPECT_EQ(low_variance_resample({0.25, 0.25, 0.25, 0.25}, 0.2), (std::vector<std::size_t>{0, 1, 2, 3}));
+  // All the weight on one particle.
+  EXPECT_EQ(low_variance_resample({0.0, 1.0, 0.0}, 0.3), (std::vector<std::size_t>{1, 1, 1}));
+  EXPECT_THROW(low_variance_resample(weights, 0.25), Error);
+  EXPECT_THROW(low_variance_resample(weights, -0.01), Error);
+  // A particle of weight w gets floor(N w) or ceil(N w) copies for any r.
+  Rng rng(3);
+  const std::vector<double> w{0.05, 0.15, 0.5, 0.3};
+  for (int trial = 0; trial < 50; ++trial) {
+    const std::vector<std::size_t> drawn = low_variance_resample(w, rng);
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      const auto copies = static_cast<double>(std::count(drawn.begin(), drawn.end(), i));
+      EXPECT_GE(copies, std::floor(4.0 * w[i]));
+      EXPECT_LE(copies, std::ceil(4.0 * w[i]));
+    }
+  }
+}
+
+TEST(Proposal, MotionDensityIsANormalisedGaussian) {
+  const Eigen::Vector3d sigmas(0.1, 0.1, 0.05);
+  const SE2 predicted(1.0, 2.0, 0.5);
+  const double peak = -1.5 * std::log(2.0 * std::numbers::pi) - std::log(0.1 * 0.1 * 0.05);
+  EXPECT_NEAR(log_motion_density(predicted, predicted, sigmas), peak, 1e-12);
+  // One sigma along the predicted pose's own y axis costs exactly 1/2.
+  EXPECT_NEAR(log_motion_density(predicted * SE2(0.0, 0.1, 0.0), predicted, sigmas), peak - 0.5, 1e-12);
+  EXPECT_NEAR(log_motion_density(predicted * SE2(0.0, 0.0, -0.1), predicted, sigmas), peak - 2.0, 1e-12);
+  // Sigmas grow with the motion and never fall below the floors.
+  const RbpfMotionNoise noise;
+  EXPECT_EQ(motion_sigmas(SE2(), noise), Eigen::Vector3d(noise.min_sigma_translation, noise.min_sigma_translation,
+                                                         noise.min_sigma_rotation));
+  const Eigen::Vector3d moved = motion_sigmas(SE2(1.0, 0.0, 0.5), noise);
+  EXPECT_NEAR(moved.x(), noise.srr * 1.0 + noise.srt * 0.5, 1e-12);
+  EXPECT_NEAR(moved.z(), noise.str * 1.0 + noise.stt * 0.5, 1e-12);
+}
+
+// A noiseless laser, odometry with only a systematic drift: one particle's filter is scan
+// matching against its own map, and recovers the true path far better than the odometry.
+TEST(RbpfSlam, OneParticleOnANoiselessSimulatorIsScanMatching) {
+  SimulationConfig sim;
+  sim.duration = 120.0;
+  sim.seed = 5;
+  sim.laser.range_noise_sigma = 0.0;
+  sim.laser.dropout_probability = 0.0;
+  sim.odometry.alpha1 = sim.odometry.alpha2 = sim.odometry.alpha3 = sim.odometry.alpha4 = 0.0;
+  sim.odometry.scale_error = 0.03;
+  sim.odometry.heading_bias = 0.01;
+  const SimulatedRun run = simulate(sim);
+  const RbpfSlam slam = run_rbpf(run, {.particles = 1});
+  EXPECT_EQ(slam.stats().resamplings, 0u);  // N_eff is always 1 = N
+  EXPECT_EQ(slam.stats().fallbacks, 0u);    // every scan matched
+  const Trajectory trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), run.truth.size());
+  const AteResult ate = absolute_trajectory_error(trajectory, run.truth);
+  const AteResult odometry = absolute_trajectory_error(odometry_of(run), run.truth);
+  RecordProperty("ate_rmse_mm", static_cast<int>(1000 * ate.rmse));
+  RecordProperty("odometry_ate_rmse_mm", static_cast<int>(1000 * odometry.rmse));
+  EXPECT_LT(ate.rmse, 0.08) << "max " << ate.max;
+  EXPECT_GT(odometry.rmse, 5.0 * ate.rmse) << odometry.rmse;
+  // The path starts at the first odometry pose (the map frame is the odometry frame at t = 0).
+  EXPECT_EQ(trajectory[0].pose, laser_messages(run).front()->odom_pose);
+}
+
+const SimulatedRun& office_run() {
+  static const SimulatedRun run = [] {
+    SimulationConfig config;
+    config.duration = 240.0;
+    config.seed = 7;
+    return simulate(config);
+  }();
+  return run;
+}
+
+TEST(RbpfSlam, ClosesTheSimulatedOfficeLoopWith30Particles) {
+  const SimulatedRun& run = office_run();
+  const RbpfSlam slam = run_rbpf(run, {.particles = 30, .seed = 11});
+  const Trajectory trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), run.truth.size());
+  const AteResult ate = absolute_trajectory_error(trajectory, run.truth);
+  const AteResult odometry = absolute_trajectory_error(odometry_of(run), run.truth);
+  RecordProperty("ate_rmse_mm", static_cast<int>(1000 * ate.rmse));
+  RecordProperty("ate_max_mm", static_cast<int>(1000 * ate.max));
+  RecordProperty("odometry_ate_rmse_mm", static_cast<int>(1000 * odometry.rmse));
+  EXPECT_LT(ate.rmse, 0.05) << "max " << ate.max;
+  EXPECT_LT(ate.max, 0.4);
+  EXPECT_LT(ate.rmse, 0.2 * odometry.rmse);
+  EXPECT_GT(slam.stats().updates, 100u);
+  EXPECT_GT(slam.stats().resamplings, 0u);
+  EXPECT_LT(slam.stats().resamplings, slam.stats().updates);  // selective: not at every update
+  EXPECT_GE(slam.stats().neff_min, 1.0);
+}
+
+TEST(RbpfSlam, SameSeedSameResultOtherSeedOtherResult) {
+  SimulationConfig sim;
+  sim.duration = 60.0;
+  const SimulatedRun run = simulate(sim);
+  const RbpfConfig config{.particles = 8, .seed = 42};
+  const Trajectory a = run_rbpf(run, config).trajectory();
+  const Trajectory b = run_rbpf(run, config).trajectory();
+  RbpfConfig other = config;
+  other.seed = 43;
+  const Trajectory c = run_rbpf(run, other).trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  bool differs = false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].pose, b[i].pose) << "scan " << i;
+    differs = differs || !(a[i].pose == c[i].pose);
+  }
+  EXPECT_TRUE(differs);
+}
+
+TEST(RbpfSlam, ParticlesShareMapTilesUntilTheyWrite) {
+  SimulationConfig sim;
+  sim.duration = 10.0;
+  const SimulatedRun run = simulate(sim);
+  const auto lasers = laser_messages(run);
+  RbpfSlam slam({.particles = 4});
+  slam.add_scan(lasers.front()->scan, lasers.front()->odom_pose);
+  const OccupancyGrid& first = slam.particles()[0].map.level(0);
+  const CellIndex cell = first.geometry().cell_of(lasers.front()->odom_pose.translation());
+  for (const RbpfParticle& particle : slam.particles()) {
+    EXPECT_TRUE(particle.map.level(0).cells().shares_tile_with(first.cells(), cell));  // one copy of the first scan
+  }
+  for (const LaserMessage* laser : lasers) slam.add_scan(laser->scan, laser->odom_pose);
+  ASSERT_GT(slam.stats().updates, 2u);
+  // After updates at different poses each particle owns the tiles it wrote.
+  const OccupancyGrid& a = slam.particles()[0].map.level(0);
+  const OccupancyGrid& b = slam.particles()[1].map.level(0);
+  if (slam.stats().resamplings == 0) {
+    EXPECT_FALSE(a.cells().shares_tile_with(b.cells(), cell));
+  }
+}
+
+TEST(RbpfSlam, ReleasesALongPathWithoutDeepRecursion) {
+  auto node = std::make_shared<RbpfPathNode>(SE2(), 0, nullptr);
+  for (std::size_t i = 1; i < 1'000'000; ++i) node = std::make_shared<RbpfPathNode>(SE2(), i, std::move(node));
+  node.reset();  // would overflow the stack with a recursive destructor
+  SUCCEED();
+}
+
+TEST(RbpfSlam, RejectsBadConfiguration) {
+  EXPECT_THROW(RbpfSlam({.particles = 0}), Error);
+  EXPECT_THROW(RbpfSlam({.max_range = 0.0}), Error);
+  EXPECT_THROW(RbpfSlam({.resample_threshold = 1.5}), Error);
+  RbpfConfig config;
+  config.proposal.likelihood_sigma = 0.0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.motion.min_sigma_rotation = 0.0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+}
+
+}  // namespace
+}  // namespace slam2d
