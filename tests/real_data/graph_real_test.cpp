@@ -1,7 +1,7 @@
 // Graph SLAM (slam/graph) on the ACES log of Kuemmerle et al. 2009, the default configuration:
 // loops are closed, and the relation error stays under bounds a little above what was measured
-// (0.0372 m, 0.347 deg; bench/BENCHMARKS.md has every log), far under Hector's 0.095 m on it.
-// Intel and FR079 take 9-12 s each and are left to the dataset benchmark.
+// (0.0368 m, 0.343 deg; bench/BENCHMARKS.md has every log), far under Hector's 0.095 m on it.
+// Intel and FR079 take 8-11 s each and are left to the dataset benchmark.
 
 #include <gtest/gtest.h>
 
