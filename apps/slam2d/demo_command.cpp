@@ -1,4 +1,5 @@
-// slam2d demo: simulate the office world, map it, and score the trajectory against the truth.
+// slam2d demo: simulate the office world, map it (--method, odometry by default), and score the
+// trajectory against the truth.
 
 #include <fmt/core.h>
 
@@ -18,6 +19,7 @@ namespace {
 
 struct DemoOptions {
   std::string out = "out/demo";
+  std::string method = "odometry";
   SimulationConfig config;
   bool json = false;
   bool quiet = false;
@@ -34,6 +36,7 @@ void run_demo(const DemoOptions& options) {
   MapJobOptions map_options;
   map_options.log = log;
   map_options.out_dir = options.out;
+  map_options.method = options.method;
   map_options.quiet = options.quiet;
   const MapJobResult mapped = run_map_job(map_options);
   JsonObject accuracy;
@@ -49,11 +52,11 @@ void run_demo(const DemoOptions& options) {
   }
   std::fputs(fmt::format("slam2d demo: {:.0f} s in the simulated '{}' world, {} scans, {:.0f} m driven\n"
                          "  log and truth:   {}, {}\n"
-                         "  map (odometry):  {}/map.pgm, map.yaml, map.png ({} x {} cells at {} m)\n"
+                         "  map ({}):  {}/map.pgm, map.yaml, map.png ({} x {} cells at {} m)\n"
                          "  trajectory:      {}/trajectory.txt\n"
                          "  error vs truth:  ATE rmse {:.3f} m (max {:.3f} m), RPE over 1 m: {:.3f} m, {:.2f} deg (rmse)\n",
                          options.config.duration, options.config.world, run.truth.size(), run.truth.path_length(),
-                         log, truth_path, options.out, mapped.map.width, mapped.map.height, mapped.map.resolution,
+                         log, truth_path, options.method, options.out, mapped.map.width, mapped.map.height, mapped.map.resolution,
                          options.out, error.ate.rmse, error.ate.max, error.rpe.translation.rmse,
                          error.rpe.rotation_deg.rmse)
                  .c_str(),
@@ -66,6 +69,9 @@ void add_demo_command(CLI::App& app) {
   auto options = std::make_shared<DemoOptions>();
   CLI::App* command = app.add_subcommand("demo", "Simulate the office world, map it, and print the error against the truth");
   command->add_option("--out", options->out, "Output folder")->capture_default_str();
+  command->add_option("--method", options->method, "Mapping method")
+      ->check(CLI::IsMember(map_methods()))
+      ->capture_default_str();
   command->add_option("--seed", options->config.seed, "Simulation seed")->capture_default_str();
   command->add_option("--duration", options->config.duration, "s of simulated time")->capture_default_str();
   command->add_flag("--json", options->json, "Print a JSON summary");

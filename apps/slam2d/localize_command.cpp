@@ -26,6 +26,7 @@
 #include "slam2d/localization/hybrid.hpp"
 #include "slam2d/localization/markov_grid.hpp"
 #include "slam2d/localization/mcl.hpp"
+#include "slam2d/localization/odometry_repair.hpp"
 #include "slam2d/localization/session.hpp"
 
 namespace slam2d::cli {
@@ -44,6 +45,7 @@ struct LocalizeOptions {
   std::string kidnap_by = "5,0,90";
   std::string sensor = "likelihood-field";
   std::optional<double> range_max;
+  bool reverse_from_tv = false;
   std::string out;
   bool json = false;
   bool quiet = false;
@@ -125,13 +127,18 @@ void run_localize(const LocalizeOptions& options) {
   reader_options.range_max = options.range_max;
   CarmenReader reader(options.log, reader_options);
   Progress progress("localize", options.quiet);
+  ReverseOdometryRepair repair;
   while (auto message = reader.next()) {
+    if (const auto* odometry = std::get_if<OdometryMessage>(&*message)) {
+      repair.observe(odometry->reading);
+      continue;
+    }
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
     if (!laser->has_poses) {
       throw ParseError(reader.path(), laser->line, laser->type + " carries no odometry pose; localization needs odometry");
     }
-    session.add(laser->odom_pose, laser->scan);
+    session.add(options.reverse_from_tv ? repair.repair(laser->odom_pose) : laser->odom_pose, laser->scan);
     if (session.summary().scans % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans, localized: {}", session.summary().scans,
                                                      session.localized().back() ? "yes" : "no"));
@@ -148,6 +155,7 @@ void run_localize(const LocalizeOptions& options) {
   JsonObject summary;
   summary.add("method", options.method).add("log", options.log).add("map", options.map);
   if (options.method == "mcl") summary.add("particles", options.particles).add("sensor", options.sensor);
+  if (options.reverse_from_tv) summary.add("odometry_steps_reversed", repair.reversed_steps());
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
   summary.add("us_per_update", 1e6 * run.localizer_cpu_s / static_cast<double>(std::max<std::size_t>(run.sensor_updates, 1)));
@@ -185,6 +193,8 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();
   command->add_option("--range-max", options->range_max, "m, FLASER readings at or beyond are no-return (default: PARAM, else 80)");
+  command->add_flag("--reverse-from-tv", options->reverse_from_tv,
+                    "Mirror scan-to-scan odometry steps that move forward while ODOM tv < 0 (FR079 integrates reversing as forward)");
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");

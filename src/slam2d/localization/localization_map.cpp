@@ -12,6 +12,15 @@ namespace slam2d {
 namespace {
 
 constexpr double kLogScale = 1000.0;  // the table holds round(1000 log p)
+constexpr int kTileShift = 3;          // 8 x 8 samples per tile
+constexpr int kTileMask = (1 << kTileShift) - 1;
+
+// Index of sample (x, y) in the tiled table with `tiles_x` tiles per row.
+inline std::size_t tiled_index(int x, int y, int tiles_x) {
+  const std::size_t tile = static_cast<std::size_t>(y >> kTileShift) * static_cast<std::size_t>(tiles_x) +
+                           static_cast<std::size_t>(x >> kTileShift);
+  return tile << (2 * kTileShift) | static_cast<std::size_t>((y & kTileMask) << kTileShift | (x & kTileMask));
+}
 
 std::int16_t quantize_log(double density) {
   return static_cast<std::int16_t>(std::clamp(std::lround(kLogScale * std::log(density)), -32000L, 32000L));
@@ -31,18 +40,23 @@ LocalizationMap::LocalizationMap(OccupancyMap map, const LikelihoodFieldConfig& 
   check(!free_cells_.empty(), "localization: the map has no free cells");
   T_field_map_ = field_.origin().inverse();
   inverse_resolution_ = 1.0 / field_.resolution();
-  log_density_.resize(static_cast<std::size_t>(field_.width()) * field_.height());
-  for (int y = 0; y < field_.height(); ++y) {
-    for (int x = 0; x < field_.width(); ++x) {
-      log_density_[static_cast<std::size_t>(y) * field_.width() + x] = quantize_log(field_.beam_likelihood(field_.cell_center(x, y)));
-    }
-  }
   // A point beyond the field is max_distance from every obstacle.
   const double far = field_.config().max_distance;
   const double sigma = field_.config().sigma_hit;
   outside_log_density_ = quantize_log(field_.config().z_hit / (std::sqrt(2.0 * std::numbers::pi) * sigma) *
                                           std::exp(-far * far / (2.0 * sigma * sigma)) +
                                       field_.config().z_rand / field_.config().z_max);
+  // The table has a border of one sample on every side that holds the value beyond the field, so
+  // a lookup clamps its coordinates instead of branching.
+  tiles_x_ = (field_.width() + 2 + kTileMask) >> kTileShift;
+  const int tiles_y = (field_.height() + 2 + kTileMask) >> kTileShift;
+  log_density_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y) << (2 * kTileShift),
+                      outside_log_density_);
+  for (int y = 0; y < field_.height(); ++y) {
+    for (int x = 0; x < field_.width(); ++x) {
+      log_density_[tiled_index(x + 1, y + 1, tiles_x_)] = quantize_log(field_.beam_likelihood(field_.cell_center(x, y)));
+    }
+  }
 }
 
 bool LocalizationMap::is_free(const Eigen::Vector2d& point_map) const {
@@ -67,23 +81,35 @@ double LocalizationMap::scan_log_likelihood(const std::vector<Eigen::Vector2d>& 
   const Eigen::Vector2d t = (R_field_map * T_map_robot.translation() + T_field_map_.translation()) * inverse_resolution_;
   const double c = R(0, 0) * inverse_resolution_;
   const double s = R(1, 0) * inverse_resolution_;
-  const double tx = t.x();
-  const double ty = t.y();
-  const int width = field_.width();
-  const int height = field_.height();
+  // Sample coordinates shifted by the border, clamped onto it: (int)(u + 1) is the sample of
+  // floor(u) for u in [0, width), the border for anything outside.
+  const double tx = t.x() + 1.0;
+  const double ty = t.y() + 1.0;
+  const double u_max = static_cast<double>(field_.width() + 1);
+  const double v_max = static_cast<double>(field_.height() + 1);
+  const int tiles_x = tiles_x_;
   const std::int16_t* table = log_density_.data();
-  // Integer sums of quantised logs: no multiply chain, no log call, a quarter of the memory of
-  // a double table (the reads are what costs).
+  // Two passes over chunks: the index computation has no branch; the table reads
+  // (the cost) are then independent. Integer sums of quantised logs: no log call.
+  constexpr std::size_t kChunk = 64;
+  std::uint32_t index[kChunk];
   long sum = 0;
-  for (const Eigen::Vector2d& p : points_robot) {
-    // Field cell coordinates; cell (i, j) covers [i, i + 1) x [j, j + 1).
-    const double u = c * p.x() - s * p.y() + tx;
-    const double v = s * p.x() + c * p.y() + ty;
-    if (u >= 0.0 && v >= 0.0 && u < width && v < height) {
-      sum += table[static_cast<std::size_t>(static_cast<int>(v)) * width + static_cast<int>(u)];
-    } else {
-      sum += outside_log_density_;
+  const Eigen::Vector2d* points = points_robot.data();
+  const std::size_t n = points_robot.size();
+  for (std::size_t begin = 0; begin < n; begin += kChunk) {
+    const std::size_t count = std::min(kChunk, n - begin);
+    for (std::size_t k = 0; k < count; ++k) {
+      const double px = points[begin + k].x();
+      const double py = points[begin + k].y();
+      double u = c * px - s * py + tx;
+      double v = s * px + c * py + ty;
+      u = u > 0.0 ? u : 0.0;  // also maps NaN onto the border
+      v = v > 0.0 ? v : 0.0;
+      u = u < u_max ? u : u_max;
+      v = v < v_max ? v : v_max;
+      index[k] = static_cast<std::uint32_t>(tiled_index(static_cast<int>(u), static_cast<int>(v), tiles_x));
     }
+    for (std::size_t k = 0; k < count; ++k) sum += table[index[k]];
   }
   return static_cast<double>(sum) / kLogScale;
 }
