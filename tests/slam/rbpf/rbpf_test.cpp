@@ -1,7 +1,7 @@
 // Rao-Blackwellized particle filter SLAM: N_eff and low-variance resampling against hand-computed
-// cases, the proposal's densities, one particle on a noiseless simulator reducing to scan
-// matching, determinism, copy-on-write map sharing, and the simulated office loop closed with 30
-// particles.
+// cases, the proposal's densities and likelihood lookup, one particle on a noiseless simulator
+// reducing to scan matching, determinism, copy-on-write map sharing, and the simulated office
+// loop closed with 30 particles.
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,9 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/eval/ate.hpp"
+#include "slam2d/grid/bilinear.hpp"
 #include "slam2d/sim/simulator.hpp"
+#include "slam2d/slam/hector/scan_preprocessing.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
 #include "slam2d/slam/rbpf/resampling.hpp"
 
@@ -92,6 +94,46 @@ TEST(Proposal, MotionDensityIsANormalisedGaussian) {
 
 // A noiseless laser, odometry with only a systematic drift: one particle's filter is scan
 // matching against its own map, and recovers the true path far better than the odometry.
+// The likelihood's own bilinear lookup (logistic table, no gradient) against interpolate_occupancy,
+// at the scan's pose and off it (end points in unknown cells, on tile borders), and its stride.
+TEST(Proposal, ObservationLikelihoodMatchesBilinearOccupancy) {
+  SimulationConfig sim;
+  sim.duration = 2.0;
+  const SimulatedRun run = simulate(sim);
+  const LaserMessage& laser = *laser_messages(run).front();
+  MapPyramid map(MapPyramidConfig{.levels = 1, .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4}});
+  map.integrate_scan(laser.scan, laser.odom_pose);
+  const std::vector<Eigen::Vector2d> points = usable_end_points(laser.scan, 0.1, 25.0);
+  ASSERT_GT(points.size(), 100u);
+  const double sigma = 0.3;
+  for (const SE2& pose : {laser.odom_pose, laser.odom_pose * SE2(0.037, -0.021, 0.013), laser.odom_pose * SE2(1.0, 0.5, 0.4)}) {
+    std::vector<double> r2;
+    for (const Eigen::Vector2d& p : points) {
+      const double r = 1.0 - interpolate_occupancy(map.level(0), pose * p).value;
+      r2.push_back(r * r);
+    }
+    double all = 0.0;
+    double every_third = 0.0;
+    std::size_t third = 0;
+    for (std::size_t k = 0; k < r2.size(); ++k) {
+      all += r2[k];
+      if (k % 3 == 0) {
+        every_third += r2[k];
+        ++third;
+      }
+    }
+    const double expected = -all / (2.0 * sigma * sigma);
+    EXPECT_NEAR(log_observation_likelihood(map.level(0), points, pose, sigma), expected, 1e-5 * std::abs(expected));
+    const double expected_third = -every_third * static_cast<double>(points.size()) / third / (2.0 * sigma * sigma);
+    EXPECT_NEAR(log_observation_likelihood(map.level(0), points, pose, sigma, 3), expected_third,
+                1e-5 * std::abs(expected_third));
+  }
+  // At the scan's pose the end points sit on hits: a much larger likelihood than 0.2 m off.
+  EXPECT_GT(log_observation_likelihood(map.level(0), points, laser.odom_pose, sigma),
+            log_observation_likelihood(map.level(0), points, laser.odom_pose * SE2(0.2, 0.0, 0.0), sigma) + 10.0);
+  EXPECT_THROW(log_observation_likelihood(map.level(0), points, laser.odom_pose, sigma, 0), Error);
+}
+
 TEST(RbpfSlam, OneParticleOnANoiselessSimulatorIsScanMatching) {
   SimulationConfig sim;
   sim.duration = 120.0;
@@ -205,6 +247,12 @@ TEST(RbpfSlam, RejectsBadConfiguration) {
   EXPECT_THROW(RbpfSlam{config}, Error);
   config = {};
   config.motion.min_sigma_rotation = 0.0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.proposal.likelihood_stride = 0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.start_noise = -0.1;
   EXPECT_THROW(RbpfSlam{config}, Error);
 }
 

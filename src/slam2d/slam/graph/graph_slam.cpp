@@ -15,6 +15,7 @@ HectorSlamConfig default_tracking_config() {
   HectorSlamConfig config;
   config.prior_information_translation = 100.0;  // 1/m^2: sigma 0.1 m
   config.prior_information_rotation = 300.0;     // 1/rad^2: sigma 0.058 rad
+  config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands
   return config;
 }
 
@@ -52,14 +53,16 @@ PointCloud2 GraphSlam::scan_cloud(const LaserScan& scan) const {
 }
 
 // The scan matched against the tracker's map (its own frame), from the odometry prediction when
-// the scans come with odometry (with the weak prior there), else from the last pose (no prior).
+// the scans come with odometry (with the weak prior and solution remapping), else from the last
+// pose (Hector's own matching).
 HectorStep GraphSlam::track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
   if (!tracker_) {
     HectorSlamConfig config = config_.tracking;
     config.prior = T_odom_robot ? MotionPrior::kOdometry : MotionPrior::kLastPose;
-    if (!T_odom_robot) {  // the last pose is no measurement of where the robot is: no prior at it
-      config.prior_information_translation = 0.0;
+    if (!T_odom_robot) {  // the last pose is no measurement of where the robot is: neither a prior
+      config.prior_information_translation = 0.0;  // at it nor a reason to stay there
       config.prior_information_rotation = 0.0;
+      config.matcher.degeneracy_ratio = 0.0;
     }
     tracker_.emplace(config);
   }

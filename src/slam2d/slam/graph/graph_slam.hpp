@@ -37,8 +37,8 @@
 namespace slam2d {
 
 /// The tracker's configuration: Hector's, with a weak Gaussian prior at the motion prediction
-/// (sigma 0.1 m and 0.058 rad), which keeps the directions a scan leaves open (a corridor's axis)
-/// at the odometry.
+/// (sigma 0.1 m and 0.058 rad) and solution remapping (HectorMatcherConfig::degeneracy_ratio
+/// 0.01), which keep the directions a scan leaves open (a corridor's axis) at the odometry.
 HectorSlamConfig default_tracking_config();
 
 struct GraphSlamConfig {
@@ -46,7 +46,8 @@ struct GraphSlamConfig {
   double max_range = 25.0;  // m, longer readings are dropped (no-return beams always are)
   KeyframeConfig keyframes{};
   // The tracker's prediction is the odometry when the scans come with it, else the last pose
-  // (Hector's no-odometry settings, without the prior): tracking.prior itself is ignored.
+  // (Hector's no-odometry settings, without the prior and the remapping): tracking.prior itself
+  // is ignored.
   HectorSlamConfig tracking = default_tracking_config();
   double sequential_sigma_translation = 0.002;  // m, > 0: standard deviations of a sequential edge
   double sequential_sigma_rotation = 0.001;     // rad, > 0

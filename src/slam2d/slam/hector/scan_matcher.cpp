@@ -1,5 +1,6 @@
 #include "slam2d/slam/hector/scan_matcher.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -22,6 +23,8 @@ void validate(const HectorMatcherConfig& config) {
         "HectorMatcherConfig: rotation search range must be >= 0 and its step > 0");
   check(config.rotation_search_margin >= 0.0 && config.rotation_search_margin < 1.0,
         "HectorMatcherConfig: rotation_search_margin must be in [0, 1)");
+  check(config.degeneracy_ratio >= 0.0 && config.degeneracy_ratio < 1.0,
+        "HectorMatcherConfig: degeneracy_ratio must be in [0, 1)");
   check(config.rotation_search_range / config.rotation_search_step <= 100.0,
         "HectorMatcherConfig: more than 201 rotation search starts");
   if (config.kernel.type != RobustKernelType::kNone) validate(config.kernel);
@@ -55,6 +58,19 @@ void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const
 
 namespace {
 
+// Solution remapping: the projector onto the eigenvectors of the information whose eigenvalue
+// exceeds ratio times the largest (the directions the scan constrains).
+Eigen::Matrix3d constrained_projector(const Eigen::Matrix3d& information, double ratio) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
+  const double largest = eigen.eigenvalues()(2);
+  Eigen::Matrix3d projector = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d v = eigen.eigenvectors().col(k);
+    if (eigen.eigenvalues()(k) > ratio * largest) projector += v * v.transpose();
+  }
+  return projector;
+}
+
 // Variance (m^2, rad^2) reported for a pose the scan does not constrain at all.
 constexpr double kUnconstrainedVariance = 1e6;
 
@@ -72,8 +88,10 @@ Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
 HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                      const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
                                      const std::optional<PosePrior>& prior) {
+  Eigen::Matrix3d scan_information = Eigen::Matrix3d::Zero();  // H of the scan alone, at the last linearisation
   const auto linearize = [&](const SE2& pose) {
     NormalEquations<3> equations = hector_linearize(grid, points_robot, pose, config.kernel);
+    scan_information = equations.H;
     if (prior) add_pose_prior(equations, pose, *prior);
     return equations;
   };
@@ -86,6 +104,7 @@ HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vecto
     result.degenerate = !step.has_value();
     if (!step) break;
     Eigen::Vector3d dxi = *step;
+    if (config.degeneracy_ratio > 0.0) dxi = constrained_projector(scan_information, config.degeneracy_ratio) * dxi;
     dxi.z() = std::clamp(dxi.z(), -config.max_rotation_step, config.max_rotation_step);
     const double max_translation = config.max_translation_step * grid.geometry().resolution;
     if (dxi.head<2>().norm() > max_translation) dxi.head<2>() *= max_translation / dxi.head<2>().norm();

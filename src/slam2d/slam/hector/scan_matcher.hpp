@@ -42,6 +42,12 @@ struct HectorMatcherConfig {
   double rotation_search_range = 0.2;  // rad, >= 0
   double rotation_search_step = 0.1;   // rad, > 0
   double rotation_search_margin = 0.0; // 1, in [0, 1): relative cost drop a rotated start needs to win
+  // Solution remapping (J. Zhang, M. Kaess, S. Singh, "On degeneracy of optimization-based state
+  // estimation problems", ICRA 2016; not in Hector): each step is projected onto the eigenvectors
+  // of the scan's own information (H without the prior) whose eigenvalue exceeds this fraction of
+  // the largest, so that along a corridor's axis the pose stays at the guess (the prediction)
+  // instead of following the map's weak, possibly wrong pull. 0 disables it (Hector).
+  double degeneracy_ratio = 0.0;       // 1, in [0, 1)
 };
 
 struct HectorMatchResult {

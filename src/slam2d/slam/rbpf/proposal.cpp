@@ -1,6 +1,7 @@
 #include "slam2d/slam/rbpf/proposal.hpp"
 
 #include <Eigen/Cholesky>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -12,6 +13,8 @@ namespace slam2d {
 
 namespace {
 
+using CellGrid = TiledGrid<OccupancyCell>;
+
 bool positive(double value) { return std::isfinite(value) && value > 0.0; }
 bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
 
@@ -22,6 +25,36 @@ Eigen::Vector3d local_coordinates(const SE2& origin, const SE2& x) {
 }
 
 SE2 from_local(const SE2& origin, const Eigen::Vector3d& v) { return origin * SE2(v.x(), v.y(), v.z()); }
+
+// The occupancy probability 1 / (1 + exp(-l)) of a cell (0.5 if never observed), from a table
+// over l in [-kRange, kRange] with linear interpolation (error below 1e-6), exact outside.
+class LogisticTable {
+ public:
+  static constexpr double kRange = 12.0;
+  static constexpr int kSteps = 6144;
+  LogisticTable() {
+    for (int k = 0; k <= kSteps + 1; ++k) {
+      const double l = -kRange + k * (2.0 * kRange / kSteps);
+      values_[static_cast<std::size_t>(k)] = 1.0 / (1.0 + std::exp(-l));
+    }
+  }
+  inline double operator()(double l) const {
+    const double x = (l + kRange) * (kSteps / (2.0 * kRange));
+    if (!(x >= 0.0 && x < kSteps)) return 1.0 / (1.0 + std::exp(-l));
+    const auto k = static_cast<std::size_t>(x);
+    const double f = x - static_cast<double>(k);
+    return values_[k] + f * (values_[k + 1] - values_[k]);
+  }
+
+ private:
+  std::array<double, kSteps + 2> values_{};
+};
+
+const LogisticTable kLogistic;
+
+inline double table_probability(const OccupancyCell& cell) {
+  return cell.last_scan == 0 ? 0.5 : kLogistic(cell.log_odds);
+}
 
 }  // namespace
 
@@ -37,6 +70,7 @@ void validate(const RbpfProposalConfig& config) {
   check(positive(config.likelihood_sigma), "RbpfProposalConfig: likelihood_sigma must be positive");
   check(config.weight_gain > 0.0 && config.weight_gain <= 1.0, "RbpfProposalConfig: weight_gain must be in (0, 1]");
   check(non_negative(config.motion_prior_weight), "RbpfProposalConfig: motion_prior_weight must be finite and >= 0");
+  check(config.likelihood_stride >= 1, "RbpfProposalConfig: likelihood_stride must be >= 1");
   check(config.sample_radius >= 1 && config.sample_radius <= 5, "RbpfProposalConfig: sample_radius must be in [1, 5]");
   check(positive(config.sample_step_translation) && positive(config.sample_step_rotation),
         "RbpfProposalConfig: sample steps must be positive");
@@ -61,17 +95,55 @@ double log_motion_density(const SE2& x, const SE2& predicted, const Eigen::Vecto
 }
 
 double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                  const SE2& T_map_robot, double sigma) {
+                                  const SE2& T_map_robot, double sigma, std::size_t stride) {
+  check(stride >= 1, "log_observation_likelihood: stride must be >= 1");
   const double c = std::cos(T_map_robot.theta());
   const double s = std::sin(T_map_robot.theta());
   const Eigen::Vector2d& t = T_map_robot.translation();
+  // The same value as interpolate_occupancy (grid/bilinear.hpp), without its gradient and with the
+  // logistic function read from a table: this loop is most of the filter's time.
+  const GridGeometry& geometry = grid.geometry();
+  const CellGrid& cells = grid.cells();
+  const double inverse_resolution = 1.0 / geometry.resolution;
+  constexpr int kMask = CellGrid::kTileSize - 1;
   double sum = 0.0;
-  for (const Eigen::Vector2d& p : points_robot) {
+  std::size_t used = 0;
+  for (std::size_t k = 0; k < points_robot.size(); k += stride, ++used) {
+    const Eigen::Vector2d& p = points_robot[k];
     const Eigen::Vector2d S(c * p.x() - s * p.y() + t.x(), s * p.x() + c * p.y() + t.y());
-    const double r = 1.0 - interpolate_occupancy(grid, S).value;
+    double value = 0.5;
+    if (geometry.in_index_range(S, GridGeometry::kMaxCellIndex - 2.0)) {
+      const double u = (S.x() - geometry.origin.x()) * inverse_resolution - 0.5;
+      const double v = (S.y() - geometry.origin.y()) * inverse_resolution - 0.5;
+      const CellIndex i{GridGeometry::floor_to_int(u), GridGeometry::floor_to_int(v)};
+      const double fx = u - i.x;
+      const double fy = v - i.y;
+      double m00, m10, m01, m11;
+      if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
+        const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
+        if (tile == nullptr) {
+          m00 = m10 = m01 = m11 = 0.5;
+        } else {
+          const int offset = CellGrid::offset_in_tile(i);
+          m00 = table_probability(tile->cells[offset]);
+          m10 = table_probability(tile->cells[offset + 1]);
+          m01 = table_probability(tile->cells[offset + CellGrid::kTileSize]);
+          m11 = table_probability(tile->cells[offset + CellGrid::kTileSize + 1]);
+        }
+      } else {
+        m00 = table_probability(cells.at(i));
+        m10 = table_probability(cells.at({i.x + 1, i.y}));
+        m01 = table_probability(cells.at({i.x, i.y + 1}));
+        m11 = table_probability(cells.at({i.x + 1, i.y + 1}));
+      }
+      value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
+    }
+    const double r = 1.0 - value;
     sum += r * r;
   }
-  return -sum / (2.0 * sigma * sigma);
+  // Every stride-th end point stands for the stride points around it (same scale as stride 1).
+  const double scale = used > 0 ? static_cast<double>(points_robot.size()) / static_cast<double>(used) : 0.0;
+  return -scale * sum / (2.0 * sigma * sigma);
 }
 
 ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen::Vector2d>& points_robot,
@@ -119,7 +191,7 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
                                  it * config.sample_step_rotation);
         const SE2 xj = from_local(result.x_star, vj);
         v.push_back(vj);
-        log_tau.push_back(log_observation_likelihood(grid, points_robot, xj, config.likelihood_sigma) +
+        log_tau.push_back(log_observation_likelihood(grid, points_robot, xj, config.likelihood_sigma, config.likelihood_stride) +
                           log_motion_density(xj, predicted, sigmas));
       }
     }
@@ -168,7 +240,7 @@ SE2 sample_pose(const ProposalResult& proposal, const MapPyramid& map, const std
   log_weight_factor = map.level(0).scan_count() == 0
                           ? 0.0
                           : config.weight_gain *
-                                log_observation_likelihood(map.level(0), points_robot, x, config.likelihood_sigma);
+                                log_observation_likelihood(map.level(0), points_robot, x, config.likelihood_sigma, config.likelihood_stride);
   return x;
 }
 

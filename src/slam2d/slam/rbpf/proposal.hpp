@@ -49,6 +49,8 @@ struct RbpfProposalConfig {
   // The motion model as a Gaussian prior in the scan matching (x* maximises likelihood times
   // motion model, the proposal's mode); 0 matches on the likelihood alone, 1 is the exact product.
   double motion_prior_weight = 1.0;   // 1, >= 0
+  // The likelihood of the K poses reads every likelihood_stride-th end point (scaled to all of them).
+  std::size_t likelihood_stride = 2;  // >= 1
   int sample_radius = 1;              // K = (2 radius + 1)^3 poses around x*, in [1, 5]
   double sample_step_translation = 0.02;  // m, grid step of the x_j in x and y, > 0
   double sample_step_rotation = 0.01;     // rad, grid step of the x_j in theta, > 0
@@ -72,8 +74,9 @@ Eigen::Vector3d motion_sigmas(const SE2& u, const RbpfMotionNoise& noise);
 double log_motion_density(const SE2& x, const SE2& predicted, const Eigen::Vector3d& sigmas);
 
 /// log p(z | m, x) = -sum_i (1 - M(x p_i))^2 / (2 sigma^2) over robot-frame end points p_i.
+/// With stride > 1 only every stride-th point is read and the sum is scaled by (points / points read).
 double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                  const SE2& T_map_robot, double sigma);
+                                  const SE2& T_map_robot, double sigma, std::size_t stride = 1);
 
 struct ProposalResult {
   SE2 x_star;                          // the match (x' when it was rejected)

@@ -34,6 +34,7 @@ void validate(const RbpfConfig& config) {
   check(non_negative(config.update_distance) && non_negative(config.update_angle) &&
             non_negative(config.update_interval),
         "RbpfConfig: update thresholds must be finite and >= 0");
+  check(non_negative(config.start_noise), "RbpfConfig: start_noise must be finite and >= 0");
   check(non_negative(config.scan_odometry_prior_weight), "RbpfConfig: scan_odometry_prior_weight must be finite and >= 0");
   check(config.resample_threshold >= 0.0 && config.resample_threshold <= 1.0,
         "RbpfConfig: resample_threshold must be in [0, 1]");
@@ -83,8 +84,16 @@ void RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
                                const SE2& u) {
   RbpfParticle& particle = particles_[i];
   Rng rng = stream(config_.seed, stats_.updates, i);
-  const SE2 predicted = particle.T_map_robot * u;
+  SE2 predicted = particle.T_map_robot * u;
   const Eigen::Vector3d sigmas = motion_sigmas(u, config_.motion);
+  if (config_.start_noise > 0.0 && stats_.updates > 1) {
+    // GMapping's drawFromMotion before the scan matching: each particle starts its match from its
+    // own draw of the motion model, so the particles explore different poses and one of them can
+    // land in the basin of an old part of the map when a large loop closes.
+    const double k = config_.start_noise;
+    const Eigen::Vector3d n(rng.gaussian(), rng.gaussian(), rng.gaussian());
+    predicted = predicted * SE2(k * sigmas.x() * n.x(), k * sigmas.y() * n.y(), k * sigmas.z() * n.z());
+  }
   const ProposalResult proposal = improved_proposal(particle.map, points, predicted, sigmas, config_.proposal);
   double log_factor = 0.0;
   particle.T_map_robot = sample_pose(proposal, particle.map, points, predicted, sigmas, config_.proposal, rng, log_factor);

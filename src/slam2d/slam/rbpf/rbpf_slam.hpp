@@ -45,6 +45,10 @@ struct RbpfConfig {
   double update_distance = 0.5;    // m, odometry distance that triggers an update (GMapping: linearUpdate)
   double update_angle = 0.25;      // rad, odometry rotation that triggers one (GMapping: angularUpdate)
   double update_interval = 0.0;    // s, time that triggers one; 0 disables (GMapping: temporalUpdate)
+  // The scan matching of an update starts from x' (+) (start_noise sigma_u) n, n ~ N(0, I), drawn
+  // per particle (GMapping's drawFromMotion); the motion prior is centred there too. 0 starts every
+  // particle at x' = x_{t-1} (+) u: the particles then barely spread and ACES's large loop stays open.
+  double start_noise = 0.5;        // 1, >= 0
   double resample_threshold = 0.5; // 1, resample when N_eff < this * N, in [0, 1]
   // Scan-matched odometry (not in the paper): every scan is matched against the best particle's
   // map from the odometry prediction, and the matched motions replace the wheel odometry as the
