@@ -16,20 +16,13 @@
 #include "slam2d/localization/session.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/sim/world.hpp"
+#include "support/simulated_office.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
 namespace {
 
-const SimulatedRun& office_run() {
-  static const SimulatedRun run = [] {
-    SimulationConfig config;
-    config.duration = 120.0;
-    config.seed = 5;
-    return simulate(config);
-  }();
-  return run;
-}
+const SimulatedRun& office_run() { return test::simulated_office(120.0, 5); }
 
 const LocalizationMap& office_map() {
   static const LocalizationMap map(rasterize_world(make_world("office"), 0.05));

@@ -12,19 +12,12 @@
 #include "slam2d/eval/ate.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
+#include "support/simulated_office.hpp"
 
 namespace slam2d {
 namespace {
 
-const SimulatedRun& office_run() {
-  static const SimulatedRun run = [] {
-    SimulationConfig config;
-    config.duration = 240.0;
-    config.seed = 7;
-    return simulate(config);
-  }();
-  return run;
-}
+const SimulatedRun& office_run() { return test::simulated_office(240.0, 7); }
 
 GraphSlam run_graph_slam(const GraphSlamConfig& config, bool use_odometry) {
   GraphSlam slam(config);

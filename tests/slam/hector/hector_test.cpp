@@ -19,20 +19,13 @@
 #include "slam2d/slam/hector/hector_slam.hpp"
 #include "slam2d/slam/hector/scan_matcher.hpp"
 #include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "support/simulated_office.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
 namespace {
 
-const SimulatedRun& office_run() {
-  static const SimulatedRun run = [] {
-    SimulationConfig config;
-    config.duration = 150.0;
-    config.seed = 4;
-    return simulate(config);
-  }();
-  return run;
-}
+const SimulatedRun& office_run() { return test::simulated_office(150.0, 4); }
 
 TEST(HectorMatcher, RecoversKnownOffsetsOnTheOfficeMap) {
   const SimulatedRun& run = office_run();

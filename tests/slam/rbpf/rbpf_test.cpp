@@ -15,6 +15,7 @@
 #include "slam2d/slam/hector/scan_preprocessing.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
 #include "slam2d/slam/rbpf/resampling.hpp"
+#include "support/simulated_office.hpp"
 
 namespace slam2d {
 namespace {
@@ -159,15 +160,7 @@ TEST(RbpfSlam, OneParticleOnANoiselessSimulatorIsScanMatching) {
   EXPECT_EQ(trajectory[0].pose, laser_messages(run).front()->odom_pose);
 }
 
-const SimulatedRun& office_run() {
-  static const SimulatedRun run = [] {
-    SimulationConfig config;
-    config.duration = 240.0;
-    config.seed = 7;
-    return simulate(config);
-  }();
-  return run;
-}
+const SimulatedRun& office_run() { return test::simulated_office(240.0, 7); }
 
 TEST(RbpfSlam, ClosesTheSimulatedOfficeLoopWith30Particles) {
   const SimulatedRun& run = office_run();
