@@ -1,6 +1,7 @@
 #include "slam2d/localization/mcl.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -24,8 +25,28 @@ void validate(const MclConfig& config) {
         "mcl: need 0 < alpha_slow < alpha_fast <= 1");
   check(config.max_injection >= 0.0 && config.max_injection <= 1.0, "mcl: max_injection must be in [0, 1]");
   check(config.injection_ratio > 0.0 && config.injection_ratio <= 1.0, "mcl: injection_ratio must be in (0, 1]");
+  check(config.takeover_updates >= 1 && config.recovery_updates >= 1, "mcl: takeover_updates and recovery_updates must be >= 1");
   check(config.status.lost_after >= 1, "mcl: status.lost_after must be >= 1");
 }
+
+namespace {
+
+// Low-variance resampling (Table 4.4): `count` poses drawn from `poses` by their weights into `out`.
+void draw_low_variance(const std::vector<SE2>& poses, const std::vector<double>& weights, std::size_t count, Rng& rng,
+                       std::vector<SE2>& out) {
+  out.clear();
+  const double step = 1.0 / static_cast<double>(count);
+  double r = rng.uniform(0.0, step);
+  double c = weights[0];
+  std::size_t i = 0;
+  for (std::size_t m = 0; m < count; ++m) {
+    const double u = r + static_cast<double>(m) * step;
+    while (u > c && i + 1 < poses.size()) c += weights[++i];
+    out.push_back(poses[i]);
+  }
+}
+
+}  // namespace
 
 std::size_t kld_particle_count(std::size_t k, double epsilon, double z) {
   if (k <= 1) return 1;
@@ -74,6 +95,7 @@ void MonteCarloLocalization::initialize(const SE2& T_map_robot, const Covariance
   initialized_ = true;
   started_ = false;
   status_.reset();
+  drop_recovery();
 }
 
 void MonteCarloLocalization::initialize_global() {
@@ -83,33 +105,48 @@ void MonteCarloLocalization::initialize_global() {
   initialized_ = true;
   started_ = false;
   status_.reset();
+  drop_recovery();
 }
 
 void MonteCarloLocalization::predict(const OdometryControl& u) {
   const Eigen::Vector3d sigmas = control_covariance(u, config_.motion).diagonal().cwiseSqrt();
   for (SE2& p : particles_) p = sample_odometry_motion(p, u, sigmas, rng_);
+  for (SE2& p : recovery_) p = sample_odometry_motion(p, u, sigmas, rng_);
+}
+
+MonteCarloLocalization::SetLikelihood MonteCarloLocalization::weigh_poses(const ScanBeams& beams,
+                                                                          const std::vector<SE2>& poses,
+                                                                          std::vector<double>& weights) {
+  const std::size_t n = poses.size();
+  const bool field = config_.sensor == SensorModelKind::kLikelihoodField;
+  const double count = static_cast<double>(std::max<std::size_t>(field ? beams.points_robot.size() : beams.ranges.size(), 1));
+  log_likelihoods_.resize(n);
+  SetLikelihood result;
+  for (std::size_t i = 0; i < n; ++i) {
+    log_likelihoods_[i] = field ? map_.scan_log_likelihood(beams.points_robot, poses[i])
+                                : beam_model_log_likelihood(map_.map(), beams, poses[i], config_.beam);
+    if (log_likelihoods_[i] > log_likelihoods_[result.best]) result.best = i;
+  }
+  const double best = log_likelihoods_[result.best];
+  weights.resize(n);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    weights[i] = std::exp(config_.likelihood_exponent * (log_likelihoods_[i] - best));
+    sum += weights[i];
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    weights[i] /= sum;
+    const double per_beam = std::exp(log_likelihoods_[i] / count);  // the per-beam geometric mean likelihood
+    result.mean += per_beam;
+    result.weighted += weights[i] * per_beam;
+  }
+  result.mean /= static_cast<double>(n);
+  return result;
 }
 
 double MonteCarloLocalization::weigh(const ScanBeams& beams) {
-  const std::size_t n = particles_.size();
-  weights_.resize(n);
-  const bool field = config_.sensor == SensorModelKind::kLikelihoodField;
-  const double count = static_cast<double>(std::max<std::size_t>(field ? beams.points_robot.size() : beams.ranges.size(), 1));
-  double best = -std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < n; ++i) {
-    weights_[i] = field ? map_.scan_log_likelihood(beams.points_robot, particles_[i])
-                        : beam_model_log_likelihood(map_.map(), beams, particles_[i], config_.beam);
-    best = std::max(best, weights_[i]);
-  }
-  double w_avg = 0.0;
-  double sum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    w_avg += std::exp(weights_[i] / count);  // the per-beam geometric mean likelihood
-    weights_[i] = std::exp(config_.likelihood_exponent * (weights_[i] - best));
-    sum += weights_[i];
-  }
-  for (double& w : weights_) w /= sum;
-  w_avg /= static_cast<double>(n);
+  const SetLikelihood tracked = weigh_poses(beams, particles_, weights_);
+  const double w_avg = tracked.mean;
   if (sensor_updates_ == 0) {
     w_slow_ = w_avg;
     w_fast_ = w_avg;
@@ -118,50 +155,87 @@ double MonteCarloLocalization::weigh(const ScanBeams& beams) {
     w_fast_ += config_.alpha_fast * (w_avg - w_fast_);  // line 11
   }
   ++sensor_updates_;
+  if (!recovery_.empty()) weigh_recovery(beams, tracked);
   return w_avg;
+}
+
+void MonteCarloLocalization::weigh_recovery(const ScanBeams& beams, const SetLikelihood& tracked) {
+  const SetLikelihood recovery = weigh_poses(beams, recovery_, recovery_weights_);
+  // The recovery set wins an update when it would itself count as localized (compact and plausible
+  // at its mean, the criteria of LocalizationStatus) and explains the scan better.
+  SE2 mean;
+  Covariance3 covariance;
+  weighted_pose_statistics(recovery_, recovery_weights_, &mean, &covariance);
+  const double sigma_xy = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance.topLeftCorner<2, 2>()).eigenvalues().maxCoeff());
+  const bool compact = sigma_xy <= config_.status.max_sigma_xy && std::sqrt(covariance(2, 2)) <= config_.status.max_sigma_theta;
+  const bool plausible =
+      compact && map_.plausibility(beams.points_robot, mean, config_.status.plausibility_distance) >= config_.status.min_plausibility;
+  recovery_better_ = recovery.weighted > tracked.weighted;
+  recovery_wins_ = plausible && recovery_better_ ? recovery_wins_ + 1 : 0;
+  if (recovery_wins_ < config_.takeover_updates) return;
+  particles_.swap(recovery_);
+  weights_.swap(recovery_weights_);
+  // The short-term average restarts at the new set's likelihood, so injection stops at once. The
+  // old tracked set becomes the alternative: it wins back if the takeover was wrong.
+  w_fast_ = std::max(w_fast_, recovery.weighted);
+  ++takeovers_;
+  recovery_wins_ = 0;
+  recovery_better_ = false;
+  updates_since_injection_ = 0;
+}
+
+void MonteCarloLocalization::drop_recovery() {
+  recovery_.clear();
+  recovery_weights_.clear();
+  recovery_wins_ = 0;
+  recovery_better_ = false;
+  updates_since_injection_ = 0;
+}
+
+void MonteCarloLocalization::update_recovery(double p_inject) {
+  injected_last_ = 0;
+  if (p_inject <= 0.0) {
+    // A kidnap into a look-alike place lowers the likelihood only for a moment: the set searches
+    // on for recovery_updates after the last injection, and as long as it explains the scan better.
+    if (recovery_.empty()) return;
+    if (++updates_since_injection_ >= config_.recovery_updates && !recovery_better_) {
+      drop_recovery();
+      return;
+    }
+  } else {
+    updates_since_injection_ = 0;
+  }
+  if (recovery_.empty()) {
+    recovery_.resize(config_.max_particles);
+    for (SE2& p : recovery_) p = map_.sample_free_pose(rng_);
+    injected_last_ = recovery_.size();
+  } else {
+    draw_low_variance(recovery_, recovery_weights_, config_.max_particles, rng_, scratch_);
+    recovery_.swap(scratch_);
+    for (SE2& p : recovery_) {
+      if (p_inject > 0.0 && rng_.bernoulli(p_inject)) {
+        p = map_.sample_free_pose(rng_);
+        ++injected_last_;
+      }
+    }
+  }
+  recovery_weights_.assign(recovery_.size(), 1.0 / static_cast<double>(recovery_.size()));
 }
 
 LocalizationEstimate MonteCarloLocalization::summarize(const ScanBeams& beams) {
   LocalizationEstimate estimate;
   weighted_pose_statistics(particles_, weights_, &estimate.pose, &estimate.covariance);
   estimate.plausibility = map_.plausibility(beams.points_robot, estimate.pose, config_.status.plausibility_distance);
-  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_);
+  // Not localized either while the recovery set searches: the filter doubts its place.
+  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_) && recovery_.empty();
   estimate.localized = status_.update(estimate.covariance, likely ? estimate.plausibility : 0.0);
   return estimate;
 }
 
 void MonteCarloLocalization::resample() {
-  const std::size_t n = particles_.size();
-  // Low-variance resampling (Table 4.4) of `count` particles from the weighted set into scratch_.
-  const auto draw = [&](std::size_t count) {
-    scratch_.clear();
-    const double step = 1.0 / static_cast<double>(count);
-    double r = rng_.uniform(0.0, step);
-    double c = weights_[0];
-    std::size_t i = 0;
-    for (std::size_t m = 0; m < count; ++m) {
-      const double u = r + static_cast<double>(m) * step;
-      while (u > c && i + 1 < n) c += weights_[++i];
-      scratch_.push_back(particles_[i]);
-    }
-  };
-  // Augmented MCL (Table 8.3, line 13): random poses with probability max(0, 1 - w_fast / w_slow).
-  const double p_inject =
-      config_.augmented && w_slow_ > 0.0 ? std::min(config_.max_injection, std::max(0.0, 1.0 - w_fast_ / (config_.injection_ratio * w_slow_))) : 0.0;
-  const auto inject = [&] {
-    injected_last_ = 0;
-    if (p_inject <= 0.0) return;
-    for (SE2& particle : scratch_) {
-      if (rng_.bernoulli(p_inject)) {
-        particle = map_.sample_free_pose(rng_);
-        ++injected_last_;
-      }
-    }
-  };
   std::size_t target = config_.max_particles;
   if (config_.kld_sampling) {
-    draw(std::max(n, config_.min_particles));
-    inject();
+    draw_low_variance(particles_, weights_, std::max(particles_.size(), config_.min_particles), rng_, scratch_);
     std::vector<std::uint64_t> bins;
     bins.reserve(scratch_.size());
     for (const SE2& p : scratch_) {
@@ -175,10 +249,14 @@ void MonteCarloLocalization::resample() {
     target = std::clamp(kld_particle_count(k, config_.kld_epsilon, config_.kld_z), config_.min_particles,
                         config_.max_particles);
   }
-  draw(target);
-  inject();
+  draw_low_variance(particles_, weights_, target, rng_, scratch_);
   particles_.swap(scratch_);
   weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  // Augmented MCL (Table 8.3, line 13): random poses with probability max(0, 1 - w_fast / w_slow),
+  // here into the recovery set.
+  const double p_inject =
+      config_.augmented && w_slow_ > 0.0 ? std::min(config_.max_injection, std::max(0.0, 1.0 - w_fast_ / (config_.injection_ratio * w_slow_))) : 0.0;
+  update_recovery(p_inject);
 }
 
 LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, const LaserScan& scan) {
