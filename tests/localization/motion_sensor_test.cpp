@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -167,6 +168,25 @@ TEST(LikelihoodFieldModel, TheTruePoseScoresBestAndPlausibilityIsOne) {
   // Free-pose samples stand in free cells.
   Rng rng(3);
   for (int i = 0; i < 100; ++i) EXPECT_TRUE(map.is_free(map.sample_free_pose(rng).translation()));
+}
+
+TEST(LikelihoodFieldModel, TheBatchOverPosesGivesEachPoseItsOwnValue) {
+  const LocalizationMap map(room());
+  const SE2 truth(1.0, -0.5, 0.3);
+  const ScanBeams beams = select_beams(scan_in_room(map.map(), truth, 181), 60, 30.0);
+  // More poses than one block of the batch, some off the map, around and far from the truth.
+  Rng rng(5);
+  std::vector<SE2> poses;
+  for (int i = 0; i < 600; ++i) {
+    poses.push_back(i % 7 == 0 ? SE2(rng.uniform(-9.0, 9.0), rng.uniform(-9.0, 9.0), rng.uniform(-3.0, 3.0))
+                               : truth * SE2(rng.gaussian(0.0, 0.2), rng.gaussian(0.0, 0.2), rng.gaussian(0.0, 0.1)));
+  }
+  std::vector<double> batch;
+  map.scan_log_likelihoods(beams.points_robot, poses, batch);
+  ASSERT_EQ(batch.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_EQ(batch[i], map.scan_log_likelihood(beams.points_robot, poses[i])) << i;
+  const std::size_t best = static_cast<std::size_t>(std::max_element(batch.begin(), batch.end()) - batch.begin());
+  EXPECT_LT((poses[best].translation() - truth.translation()).norm(), 0.5) << "the best pose is one near the truth";
 }
 
 TEST(ScanToMap, RecoversAKnownOffset) {

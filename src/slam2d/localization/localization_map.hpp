@@ -35,6 +35,11 @@ class LocalizationMap {
   /// placed at T_map_robot, each read from the nearest sample (a density in 1/m) of a table of
   /// logs quantised to 0.001. 0 for no points.
   double scan_log_likelihood(const std::vector<Eigen::Vector2d>& points_robot, const SE2& T_map_robot) const;
+  /// scan_log_likelihood at each pose, the same values, into `log_likelihoods`. Beam by beam over
+  /// blocks of poses: a particle cloud's end points of one beam fall close together, so the
+  /// table reads stay in the cache.
+  void scan_log_likelihoods(const std::vector<Eigen::Vector2d>& points_robot, const std::vector<SE2>& poses,
+                            std::vector<double>& log_likelihoods) const;
   /// The fraction of end points within `distance` (m) of an obstacle at T_map_robot (bilinear
   /// distance): how well a pose explains a scan, 1 for a perfect fit, whatever the spread. 0 for no points.
   double plausibility(const std::vector<Eigen::Vector2d>& points_robot, const SE2& T_map_robot, double distance) const;
@@ -53,6 +58,12 @@ class LocalizationMap {
   std::vector<std::int16_t> log_density_;
   int tiles_x_ = 0;                         // tiles per row
   std::int16_t outside_log_density_ = 0;   // beyond the field: at max_distance
+
+  struct FieldPose {  // a pose as the map from robot-frame metres to table samples
+    float c, s, tx, ty;
+  };
+  FieldPose field_pose(const SE2& T_map_robot) const;
+  std::uint32_t table_index(const FieldPose& pose, float px, float py) const;
 };
 
 }  // namespace slam2d

@@ -25,7 +25,8 @@ void validate(const MclConfig& config) {
         "mcl: need 0 < alpha_slow < alpha_fast <= 1");
   check(config.max_injection >= 0.0 && config.max_injection <= 1.0, "mcl: max_injection must be in [0, 1]");
   check(config.injection_ratio > 0.0 && config.injection_ratio <= 1.0, "mcl: injection_ratio must be in (0, 1]");
-  check(config.takeover_updates >= 1 && config.recovery_updates >= 1, "mcl: takeover_updates and recovery_updates must be >= 1");
+  check(config.takeover_updates >= 1 && config.recovery_updates >= 1 && config.displaced_updates >= 1,
+        "mcl: takeover_updates, recovery_updates and displaced_updates must be >= 1");
   check(config.status.lost_after >= 1, "mcl: status.lost_after must be >= 1");
 }
 
@@ -120,11 +121,14 @@ MonteCarloLocalization::SetLikelihood MonteCarloLocalization::weigh_poses(const 
   const std::size_t n = poses.size();
   const bool field = config_.sensor == SensorModelKind::kLikelihoodField;
   const double count = static_cast<double>(std::max<std::size_t>(field ? beams.points_robot.size() : beams.ranges.size(), 1));
-  log_likelihoods_.resize(n);
+  if (field) {
+    map_.scan_log_likelihoods(beams.points_robot, poses, log_likelihoods_);
+  } else {
+    log_likelihoods_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) log_likelihoods_[i] = beam_model_log_likelihood(map_.map(), beams, poses[i], config_.beam);
+  }
   SetLikelihood result;
   for (std::size_t i = 0; i < n; ++i) {
-    log_likelihoods_[i] = field ? map_.scan_log_likelihood(beams.points_robot, poses[i])
-                                : beam_model_log_likelihood(map_.map(), beams, poses[i], config_.beam);
     if (log_likelihoods_[i] > log_likelihoods_[result.best]) result.best = i;
   }
   const double best = log_likelihoods_[result.best];
@@ -182,6 +186,7 @@ void MonteCarloLocalization::weigh_recovery(const ScanBeams& beams, const SetLik
   recovery_wins_ = 0;
   recovery_better_ = false;
   updates_since_injection_ = 0;
+  displaced_ = true;
 }
 
 void MonteCarloLocalization::drop_recovery() {
@@ -190,6 +195,7 @@ void MonteCarloLocalization::drop_recovery() {
   recovery_wins_ = 0;
   recovery_better_ = false;
   updates_since_injection_ = 0;
+  displaced_ = false;
 }
 
 void MonteCarloLocalization::update_recovery(double p_inject) {
@@ -197,13 +203,16 @@ void MonteCarloLocalization::update_recovery(double p_inject) {
   if (p_inject <= 0.0) {
     // A kidnap into a look-alike place lowers the likelihood only for a moment: the set searches
     // on for recovery_updates after the last injection, and as long as it explains the scan better.
+    // A displaced tracked set stays longer: the map may have explained its place badly for a while.
     if (recovery_.empty()) return;
-    if (++updates_since_injection_ >= config_.recovery_updates && !recovery_better_) {
+    const int keep = displaced_ ? config_.displaced_updates : config_.recovery_updates;
+    if (++updates_since_injection_ >= keep && !recovery_better_) {
       drop_recovery();
       return;
     }
   } else {
     updates_since_injection_ = 0;
+    displaced_ = false;
   }
   if (recovery_.empty()) {
     recovery_.resize(config_.max_particles);
@@ -226,8 +235,10 @@ LocalizationEstimate MonteCarloLocalization::summarize(const ScanBeams& beams) {
   LocalizationEstimate estimate;
   weighted_pose_statistics(particles_, weights_, &estimate.pose, &estimate.covariance);
   estimate.plausibility = map_.plausibility(beams.points_robot, estimate.pose, config_.status.plausibility_distance);
-  // Not localized either while the recovery set searches: the filter doubts its place.
-  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_) && recovery_.empty();
+  // Not localized either while the recovery set searches, or while the set it displaced explains
+  // the scan better: the filter doubts its place.
+  const bool doubt = !recovery_.empty() && (!displaced_ || recovery_better_);
+  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_) && !doubt;
   estimate.localized = status_.update(estimate.covariance, likely ? estimate.plausibility : 0.0);
   return estimate;
 }

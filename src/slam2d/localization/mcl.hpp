@@ -20,9 +20,9 @@
 // tracked set only when, for takeover_updates updates in a row, it explains the scan better than
 // the tracked set (weighted mean per-beam likelihood) and its best pose is plausible
 // (status.min_plausibility of the end points near obstacles), as the status would call it
-// localized; the two sets then trade places, so a wrong takeover can be undone. The recovery set
-// is dropped recovery_updates sensor updates after the last injection or takeover unless it
-// explains the scan better than the tracked set. Under the book's rule one random pose that fits a single scan better
+// localized; the two sets then trade places, so a wrong takeover can be undone. A searching set
+// is dropped recovery_updates sensor updates after the last injection, a displaced one
+// displaced_updates after the takeover, unless it explains the scan better than the tracked set. Under the book's rule one random pose that fits a single scan better
 // than a tracked set passing an unmapped or changed part of the map takes the whole filter
 // away: on FR079 a run without injection stays within 0.36 m of the truth, while every
 // injection setting jumped 5-35 m to look-alike corridors. A kidnapped robot's tracked set
@@ -85,8 +85,9 @@ struct MclConfig {
   double max_injection = 0.2;       // 1, in [0, 1]: cap on the injected fraction per step
   double injection_ratio = 0.7;     // 1, in (0, 1]: inject only while w_fast < injection_ratio w_slow
   double min_likelihood_ratio = 0.5; // 1: w_fast below this fraction of w_slow counts as implausible (status)
-  int takeover_updates = 10;        // >= 1: updates in a row the recovery set must win before it replaces the tracked set
+  int takeover_updates = 30;        // >= 1: updates in a row the recovery set must win before it replaces the tracked set
   int recovery_updates = 10;        // >= 1: sensor updates the recovery set searches on after the last injection
+  int displaced_updates = 100;      // >= 1: sensor updates a displaced tracked set is kept after a takeover
   LocalizationStatusConfig status{};
   std::uint64_t seed = 1;
 };
@@ -144,6 +145,7 @@ class MonteCarloLocalization : public Localizer {
   std::vector<double> recovery_weights_;  // normalised after weigh()
   int recovery_wins_ = 0;                 // consecutive updates the recovery set won
   bool recovery_better_ = false;          // it explained the last scan better than the tracked set
+  bool displaced_ = false;                // it is the tracked set a takeover displaced
   int updates_since_injection_ = 0;
   std::size_t takeovers_ = 0;
 
