@@ -1,11 +1,13 @@
 #include "slam2d/localization/ekf.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/localization/sensor_model.hpp"
+#include "slam2d/registration/correlative.hpp"
 
 namespace slam2d {
 
@@ -18,11 +20,38 @@ void validate(const EkfConfig& config) {
   check(config.matcher.max_iterations >= 1 && config.matcher.outlier_distance > 0.0 && config.matcher.inlier_distance > 0.0 &&
             config.matcher.sigma > 0.0,
         "ekf: matcher settings must be positive");
+  check(config.min_window_xy > 0.0 && config.max_window_xy >= config.min_window_xy && config.min_window_theta > 0.0 &&
+            config.max_window_theta >= config.min_window_theta && config.max_window_theta <= 3.14159,
+        "ekf: need 0 < min_window <= max_window (theta at most pi)");
+  check(config.angular_step > 0.0 && config.table_sigma > 0.0, "ekf: angular_step and table_sigma must be > 0");
 }
+
+namespace {
+
+// The centres of the map's obstacle cells (the likelihood field's threshold), in the map frame.
+PointCloud2 occupied_cells(const LocalizationMap& map) {
+  PointCloud2 cloud;
+  const OccupancyMap& grid = map.map();
+  for (int iy = 0; iy < grid.height; ++iy) {
+    for (int ix = 0; ix < grid.width; ++ix) {
+      if (grid.at(ix, iy) >= map.field().config().occupied_threshold) cloud.points.push_back(grid.cell_center(ix, iy));
+    }
+  }
+  return cloud;
+}
+
+}  // namespace
 
 EkfLocalization::EkfLocalization(const LocalizationMap& map, const EkfConfig& config)
     : map_(map), config_(config), status_(config.status) {
   validate(config_);
+  const PointCloud2 obstacles = occupied_cells(map_);
+  check(!obstacles.empty(), "ekf: the map has no occupied cells to match against");
+  // The margin lets the widest window reach past the outermost walls without leaving the table.
+  table_ = CorrelativeGrid(obstacles, CorrelativeGridConfig{.resolution = map_.map().resolution,
+                                                            .sigma = config_.table_sigma,
+                                                            .levels = 6,
+                                                            .margin = config_.max_window_xy});
 }
 
 void EkfLocalization::initialize(const SE2& T_map_robot, const Covariance3& covariance) {
@@ -37,13 +66,23 @@ void EkfLocalization::initialize(const SE2& T_map_robot, const Covariance3& cova
 
 bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) {
   ++stats_.updates;
-  const ScanToMapResult match = match_scan_to_map(map_.field(), points_robot, pose_, config_.matcher);
+  // Correlative search over +-3 sigma of the prediction, then least-squares refinement.
+  const double sigma_xy = std::sqrt(std::max(covariance_(0, 0), covariance_(1, 1)));
+  CorrelativeConfig search;
+  search.window_x = search.window_y = std::clamp(3.0 * sigma_xy, config_.min_window_xy, config_.max_window_xy);
+  search.window_theta = std::clamp(3.0 * std::sqrt(covariance_(2, 2)), config_.min_window_theta, config_.max_window_theta);
+  search.angular_step = config_.angular_step;
+  search.min_score = 0.0;  // the inlier gate below judges the fit
+  PointCloud2 scan;
+  scan.points.assign(points_robot.begin(), points_robot.end());
+  const MatchResult coarse = match_correlative(table_, scan, pose_, search);
+  const ScanToMapResult match = match_scan_to_map(map_.field(), points_robot, coarse.T_target_source, config_.matcher);
   if (match.inlier_fraction < config_.min_inlier_fraction) {
     ++stats_.rejected_match;
     return false;
   }
-  const Covariance3 R = match.covariance + covariance_from_sigmas(config_.measurement_sigma_xy, config_.measurement_sigma_xy,
-                                                                  config_.measurement_sigma_theta);
+  const Covariance3 R = coarse.covariance + covariance_from_sigmas(config_.measurement_sigma_xy, config_.measurement_sigma_xy,
+                                                                   config_.measurement_sigma_theta);
   Eigen::Vector3d innovation = match.T_map_robot.vector() - pose_.vector();
   innovation.z() = angle_difference(match.T_map_robot.theta(), pose_.theta());
   const Eigen::Matrix3d S = covariance_ + R;

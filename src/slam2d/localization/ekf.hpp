@@ -5,10 +5,18 @@
 // Robotics", 2005 (Table 7.3 in its odometry form, motion_model.hpp).
 //
 // Each scan: predict the pose and covariance with the odometry since the last scan (G P G^T +
-// V M V^T), match the scan against the map from the predicted pose (scan_to_map.hpp) to get a
-// pose measurement z with covariance R, and fuse it in information form (the measurement is the
-// pose itself, H = I):
+// V M V^T), match the scan against the map around the predicted pose to get a pose measurement
+// z with covariance R, and fuse it in information form (the measurement is the pose itself,
+// H = I):
 //   P+^-1 = P^-1 + R^-1,   x+ = x + P+ R^-1 (z - x).
+// The match has two stages. Correlative matching (E. Olson, ICRA 2009; registration/
+// correlative.hpp, branch-and-bound) against a lookup table of the map's occupied cells, built
+// once, searches a window of +-3 sigma of the predicted covariance (clamped to the window_*
+// bounds): it finds the best pose in the window rather than the nearest local minimum, and its
+// response distribution over the window is R, so a corridor's long axis or a second similar
+// place inside the window shows in R. The table's steps (a map cell, half a degree) are then
+// refined by least squares on the distance field (scan_to_map.hpp), whose fit feeds the inlier
+// gate.
 // Gates reject implausible matches (no fusion; the covariance grows by rejection_sigma per
 // rejected scan, so that after a wheel slip the gate opens to the next consistent match):
 //   - fewer than min_inlier_fraction of the end points lie within the matcher's inlier_distance
@@ -28,6 +36,7 @@
 #include "slam2d/localization/localizer.hpp"
 #include "slam2d/localization/motion_model.hpp"
 #include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/registration/correlative_grid.hpp"
 
 namespace slam2d {
 
@@ -35,7 +44,14 @@ struct EkfConfig {
   // Rotation noise from rotation well above the particle filter's: a Gaussian cannot absorb the
   // wheel slip of a fast turn in the tails as a particle set does, and a rejected match costs more.
   OdometryMotionConfig motion{.alpha1 = 0.2};
-  ScanToMapConfig matcher{};
+  ScanToMapConfig matcher{};          // the refinement
+  // The correlative stage: window half-widths +-3 sigma of the prediction, clamped to these.
+  double min_window_xy = 0.1;         // m, > 0
+  double max_window_xy = 0.5;         // m, >= min_window_xy
+  double min_window_theta = 0.05;     // rad, > 0
+  double max_window_theta = 0.35;     // rad, >= min_window_theta
+  double angular_step = 0.0087;       // rad, > 0: half a degree
+  double table_sigma = 0.05;          // m, > 0: the lookup table's kernel (one map cell of 5 cm)
   int max_beams = 90;                // 1, > 0: end points matched per scan
   double usable_range = 30.0;        // m, > 0
   double min_inlier_fraction = 0.5;  // 1, in [0, 1]
@@ -87,6 +103,7 @@ class EkfLocalization : public Localizer {
 
   const LocalizationMap& map_;
   EkfConfig config_;
+  CorrelativeGrid table_;  // the map's occupied cells, for the correlative stage
   bool initialized_ = false;
   bool started_ = false;
   SE2 last_odom_;
