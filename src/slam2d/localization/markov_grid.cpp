@@ -30,6 +30,7 @@ void validate(const MarkovGridConfig& config) {
             config.selective_threshold < 1.0,
         "markov: thresholds must be in [0, 1)");
   check(config.estimate_radius > 0.0, "markov: estimate_radius must be > 0");
+  validate(config.motion);
 }
 
 MarkovGridLocalization::MarkovGridLocalization(const LocalizationMap& map, const MarkovGridConfig& config)
@@ -137,11 +138,20 @@ void MarkovGridLocalization::motion_update(const OdometryControl& u) {
     }
   }
   belief_.swap(scratch_);
-  // The mass moved at most trans + 1 cells, and the blur spreads it by one more.
-  const int reach = static_cast<int>(std::ceil(u.trans / config_.resolution)) + 2;
+  // Binomial passes (variance 1/2 cell^2 each) that cover the motion model's noise for u.
+  const Eigen::Matrix3d noise = control_covariance(u, config_.motion);  // rot1, trans, rot2
+  const double variance_xy = std::max(noise(1, 1), u.trans * u.trans * noise(0, 0));
+  const double variance_theta = noise(0, 0) + noise(2, 2);
+  const auto passes = [](double variance, double step) {
+    return std::max(1, static_cast<int>(std::ceil(2.0 * variance / (step * step))));
+  };
+  const int xy_passes = passes(variance_xy, config_.resolution);
+  const int theta_passes = std::min(passes(variance_theta, angle_step_), config_.angles);
+  // The mass moved at most trans + 1 cells, and each pass spreads it by one more.
+  const int reach = static_cast<int>(std::ceil(u.trans / config_.resolution)) + 1 + xy_passes;
   box_ = {std::max(0, source.x0 - reach), std::min(width_ - 1, source.x1 + reach), std::max(0, source.y0 - reach),
           std::min(height_ - 1, source.y1 + reach)};
-  blur();
+  blur(xy_passes, theta_passes);
   // A robot cannot stand in a wall or in unknown space.
   for (int k = 0; k < n; ++k) {
     for (int y = box_.y0; y <= box_.y1; ++y) {
@@ -153,46 +163,51 @@ void MarkovGridLocalization::motion_update(const OdometryControl& u) {
   normalize();
 }
 
-void MarkovGridLocalization::blur() {
+void MarkovGridLocalization::blur(int xy_passes, int theta_passes) {
   const int n = config_.angles;
   const CellRange b = box_;
-  // Along x.
+  // Every pass writes inside the box only; the scratch belief outside stays zero, as the belief is.
   std::fill(scratch_.begin(), scratch_.end(), 0.0f);
-  for (int k = 0; k < n; ++k) {
-    for (int y = b.y0; y <= b.y1; ++y) {
-      const float* row = &belief_[index(k, y, 0)];
-      float* out = &scratch_[index(k, y, 0)];
-      for (int x = b.x0; x <= b.x1; ++x) {
-        const float left = x > 0 ? row[x - 1] : 0.0f;
-        const float right = x + 1 < width_ ? row[x + 1] : 0.0f;
-        out[x] = 0.25f * left + 0.5f * row[x] + 0.25f * right;
+  for (int pass = 0; pass < xy_passes; ++pass) {
+    // Along x.
+    for (int k = 0; k < n; ++k) {
+      for (int y = b.y0; y <= b.y1; ++y) {
+        const float* row = &belief_[index(k, y, 0)];
+        float* out = &scratch_[index(k, y, 0)];
+        for (int x = b.x0; x <= b.x1; ++x) {
+          const float left = x > 0 ? row[x - 1] : 0.0f;
+          const float right = x + 1 < width_ ? row[x + 1] : 0.0f;
+          out[x] = 0.25f * left + 0.5f * row[x] + 0.25f * right;
+        }
       }
     }
-  }
-  // Along y.
-  for (int k = 0; k < n; ++k) {
-    for (int y = b.y0; y <= b.y1; ++y) {
-      float* out = &belief_[index(k, y, 0)];
-      const float* mid = &scratch_[index(k, y, 0)];
-      const float* down = y > 0 ? &scratch_[index(k, y - 1, 0)] : nullptr;
-      const float* up = y + 1 < height_ ? &scratch_[index(k, y + 1, 0)] : nullptr;
-      for (int x = b.x0; x <= b.x1; ++x) {
-        out[x] = 0.5f * mid[x] + 0.25f * (down ? down[x] : 0.0f) + 0.25f * (up ? up[x] : 0.0f);
+    // Along y.
+    for (int k = 0; k < n; ++k) {
+      for (int y = b.y0; y <= b.y1; ++y) {
+        float* out = &belief_[index(k, y, 0)];
+        const float* mid = &scratch_[index(k, y, 0)];
+        const float* down = y > 0 ? &scratch_[index(k, y - 1, 0)] : nullptr;
+        const float* up = y + 1 < height_ ? &scratch_[index(k, y + 1, 0)] : nullptr;
+        for (int x = b.x0; x <= b.x1; ++x) {
+          out[x] = 0.5f * mid[x] + 0.25f * (down ? down[x] : 0.0f) + 0.25f * (up ? up[x] : 0.0f);
+        }
       }
     }
   }
   // Along theta (circular).
-  for (int k = 0; k < n; ++k) {
-    const int previous = (k + n - 1) % n;
-    const int next = (k + 1) % n;
-    for (int y = b.y0; y <= b.y1; ++y) {
-      for (int x = b.x0; x <= b.x1; ++x) {
-        scratch_[index(k, y, x)] =
-            0.5f * belief_[index(k, y, x)] + 0.25f * (belief_[index(previous, y, x)] + belief_[index(next, y, x)]);
+  for (int pass = 0; pass < theta_passes; ++pass) {
+    for (int k = 0; k < n; ++k) {
+      const int previous = (k + n - 1) % n;
+      const int next = (k + 1) % n;
+      for (int y = b.y0; y <= b.y1; ++y) {
+        for (int x = b.x0; x <= b.x1; ++x) {
+          scratch_[index(k, y, x)] =
+              0.5f * belief_[index(k, y, x)] + 0.25f * (belief_[index(previous, y, x)] + belief_[index(next, y, x)]);
+        }
       }
     }
+    belief_.swap(scratch_);
   }
-  belief_.swap(scratch_);
 }
 
 void MarkovGridLocalization::sensor_update(const std::vector<Eigen::Vector2d>& points_robot) {

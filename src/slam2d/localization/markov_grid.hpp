@@ -9,9 +9,11 @@
 // - Motion (once the robot has moved update_distance or turned update_angle): the accumulated
 //   odometry (rot1, trans, rot2) moves each heading layer by its own displacement, the mass split
 //   over the 8 neighbouring cells in (x, y, theta) by the fractional offsets (a bilinear splat: no
-//   rounding bias), then the belief is convolved with a [1 2 1] / 4 kernel along x, y and theta,
-//   the motion noise (variance 1/2 cell^2 per axis and update, about what alpha3 = 0.05 gives
-//   for a 0.2 m step).
+//   rounding bias), then the belief is convolved with the motion noise: m passes of a [1 2 1] / 4
+//   kernel along x and y and m_theta passes along theta, each pass adding a variance of 1/2 cell^2
+//   (1/2 layer^2), as many as cover the odometry motion model's noise for this control
+//   (motion_model.hpp: the translation variance and trans^2 var(rot1) across, var(rot1) +
+//   var(rot2) in heading), at least one (the grid's own quantisation).
 // - Sensor: Bayes' rule with the likelihood field over max_beams beams (its own sigma_hit, wider
 //   than the particle filter's, since a pose is known only to a cell), then normalisation. Cells
 //   below prune_threshold of the maximum are set to zero; once localized the threshold rises to
@@ -44,6 +46,7 @@ struct MarkovGridConfig {
   double prune_threshold = 1e-9;     // 1, of the maximum: cells below are dropped
   double selective_threshold = 1e-5; // 1, of the maximum: once localized, only cells above are updated
   double estimate_radius = 1.0;      // m: mass around the mode that makes the estimate
+  OdometryMotionConfig motion{};     // the noise the motion convolution covers
   LocalizationStatusConfig status{};
 };
 
@@ -78,7 +81,8 @@ class MarkovGridLocalization : public Localizer {
   }
   SE2 cell_pose(int k, int y, int x) const;
   void motion_update(const OdometryControl& u);
-  void blur();
+  /// Binomial passes along x and y (`xy_passes`) and along theta (`theta_passes`).
+  void blur(int xy_passes, int theta_passes);
   void sensor_update(const std::vector<Eigen::Vector2d>& points_robot);
   void normalize();
   std::size_t argmax() const;  // the most probable cell (within the box)
