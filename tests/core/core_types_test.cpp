@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <set>
+#include <vector>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
@@ -171,6 +173,37 @@ TEST(Rng, DistributionsHaveTheRightMoments) {
   EXPECT_NEAR(uniform_sum / n, 1.0, 0.01);
   EXPECT_EQ(indices.size(), 7u);
   EXPECT_EQ(*indices.rbegin(), 6u);
+}
+
+TEST(Rng, ZigguratNormalFollowsTheNormalDistribution) {
+  Rng rng(7);
+  const int n = 400000;
+  std::vector<double> samples(n);
+  double sum = 0, sum_sq = 0, sum_4 = 0;
+  int beyond_tail = 0;
+  for (double& x : samples) {
+    x = rng.normal();
+    sum += x;
+    sum_sq += x * x;
+    sum_4 += x * x * x * x;
+    beyond_tail += std::abs(x) > 3.6541528853610088 ? 1 : 0;  // drawn by the tail algorithm
+  }
+  EXPECT_NEAR(sum / n, 0.0, 0.006);       // 4 standard errors
+  EXPECT_NEAR(sum_sq / n, 1.0, 0.009);    // sd of the sample variance: sqrt(2 / n)
+  EXPECT_NEAR(sum_4 / n, 3.0, 0.07);      // sd of the fourth moment: sqrt(96 / n)
+  // P(|x| > r) = erfc(r / sqrt 2) = 2.58e-4: 103 expected, Poisson sd 10.
+  EXPECT_NEAR(beyond_tail, 103.3, 45.0);
+  // Kolmogorov-Smirnov against the normal CDF: 1.95 / sqrt(n) is the 0.1 % critical value.
+  std::sort(samples.begin(), samples.end());
+  double ks = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double cdf = 0.5 * std::erfc(-samples[i] / std::sqrt(2.0));
+    ks = std::max({ks, std::abs(cdf - static_cast<double>(i) / n), std::abs(cdf - static_cast<double>(i + 1) / n)});
+  }
+  EXPECT_LT(ks, 1.95 / std::sqrt(static_cast<double>(n)));
+  // Seeded: the same sequence again.
+  Rng a(11), b(11);
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(a.normal(), b.normal());
 }
 
 TEST(Rng, SplitStreamsAreIndependentAndReproducible) {

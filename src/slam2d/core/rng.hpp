@@ -21,6 +21,12 @@ class Rng {
   std::size_t uniform_index(std::size_t n);
   /// Normal with the given mean and standard deviation (Marsaglia's polar method).
   double gaussian(double mean = 0.0, double sigma = 1.0);
+  /// Standard normal by the ziggurat method (G. Marsaglia, W. W. Tsang, "The ziggurat method for
+  /// generating random variables", J. Stat. Software 5(8), 2000; 256 layers): one 64-bit draw
+  /// and a multiply for 99 % of the samples, several times cheaper than gaussian(), for the inner
+  /// loops that draw millions (particle motion). Exact in distribution; another sequence than
+  /// gaussian().
+  double normal();
   /// True with probability p.
   bool bernoulli(double p) { return uniform() < p; }
   /// An independent generator, e.g. one per particle or thread, derived from this one's seed.

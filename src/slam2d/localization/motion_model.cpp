@@ -73,9 +73,9 @@ SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const Odom
 
 SE2 sample_odometry_motion(const SE2& pose, const OdometryControl& u, const Eigen::Vector3d& sigmas, Rng& rng) {
   OdometryControl noisy;  // Table 5.6, lines 5-7
-  noisy.rot1 = u.rot1 - rng.gaussian(0.0, sigmas(0));
-  noisy.trans = u.trans - rng.gaussian(0.0, sigmas(1));
-  noisy.rot2 = u.rot2 - rng.gaussian(0.0, sigmas(2));
+  noisy.rot1 = u.rot1 - sigmas(0) * rng.normal();
+  noisy.trans = u.trans - sigmas(1) * rng.normal();
+  noisy.rot2 = u.rot2 - sigmas(2) * rng.normal();
   return apply_odometry(pose, noisy);  // lines 8-10
 }
 
