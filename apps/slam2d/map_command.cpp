@@ -29,6 +29,10 @@ void add_map_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--seed", options->seed, "rbpf: random seed (same log and seed give the same result)")
       ->capture_default_str();
+  command->add_option("--threads", options->threads,
+                      "rbpf: threads for the particles (0: all hardware threads, 1: serial); the result does not depend on it")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

@@ -122,6 +122,7 @@ MappingRun map_with_rbpf(const MapJobOptions& options) {
   RbpfConfig config;
   config.particles = options.particles;
   config.seed = options.seed;
+  config.threads = options.threads;
   config.map.grid.resolution = options.resolution;
   RbpfSlam slam(config);
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
@@ -131,6 +132,7 @@ MappingRun map_with_rbpf(const MapJobOptions& options) {
   run.map = slam.map().to_occupancy_map();
   const RbpfStats& stats = slam.stats();
   run.method_summary.add("particles", options.particles).add("seed", static_cast<std::size_t>(options.seed));
+  run.method_summary.add("threads", options.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
   return run;

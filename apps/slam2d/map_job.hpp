@@ -21,6 +21,7 @@ struct MapJobOptions {
   int levels = 3;                   // hector: map pyramid levels, in [1, 16]
   int particles = 30;               // rbpf: number of particles, in [1, 10000]
   std::uint64_t seed = 1;           // rbpf: seed of every random draw (same log + seed, same result)
+  int threads = 0;                  // rbpf: threads for the particles, in [0, 256] (0: all hardware threads); same result
   bool quiet = false;               // no progress line
   std::optional<double> range_max;  // m; FLASER/RLASER readings at or above are no-return (default: PARAM, else 80)
 };

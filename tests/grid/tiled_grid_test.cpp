@@ -1,4 +1,5 @@
-// TiledGrid: growth, default reads, bounding box and copy-on-write.
+// TiledGrid: growth, default reads, bounding box, copy-on-write, and copies that share tiles
+// written from several threads at once.
 
 #include "slam2d/grid/tiled_grid.hpp"
 
@@ -8,7 +9,9 @@
 
 #include <map>
 #include <random>
+#include <thread>
 #include <utility>
+#include <vector>
 
 namespace slam2d {
 namespace {
@@ -155,6 +158,76 @@ TEST(TiledGrid, UpdateRayCopiesSharedTilesFirst) {
   EXPECT_EQ(original.at({0, 0}), 5);
   EXPECT_EQ(original.at({5, 0}), 0);
   EXPECT_TRUE(copy.shares_tile_with(original, {200, 0}));
+}
+
+TEST(TiledGrid, CopiesSharingTilesCanBeReadAndWrittenFromSeveralThreads) {
+  // Eight copies of one grid share its 16 tiles; eight threads each read all of their own copy
+  // and write into it (every tile, starting at a different one, so that several threads un-share
+  // the same tile at the same moment, and so that some see it still shared and copy it while
+  // others already see themselves as its last owner and write in place). Each copy must end with
+  // exactly its own writes, the original untouched. (Run under -fsanitize=thread for the ordering.)
+  constexpr int kCopies = 8;
+  constexpr int kSide = 4 * IntGrid::kTileSize;  // 4 x 4 tiles
+  const auto initial = [](int x, int y) { return 1000 * x + y; };
+  IntGrid original;
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) original.mutable_at({x, y}) = initial(x, y);
+  }
+  for (int round = 0; round < 20; ++round) {
+    std::vector<IntGrid> copies(kCopies, original);
+    std::vector<long long> sums(kCopies, 0);
+    std::vector<std::thread> threads;
+    for (int k = 0; k < kCopies; ++k) {
+      threads.emplace_back([&, k] {
+        IntGrid& grid = copies[static_cast<std::size_t>(k)];
+        for (int t = 0; t < 16; ++t) {
+          const int tile = (t + 2 * k + round) % 16;
+          const int x0 = (tile % 4) * IntGrid::kTileSize;
+          const int y0 = (tile / 4) * IntGrid::kTileSize;
+          for (int y = 0; y < kSide; y += 7) sums[static_cast<std::size_t>(k)] += grid.at({(y * 3) % kSide, y});
+          if ((k + t) % 2 == 0) {
+            for (int y = y0; y < y0 + IntGrid::kTileSize; ++y) {
+              for (int x = x0; x < x0 + IntGrid::kTileSize; ++x) grid.mutable_at({x, y}) += k + 1;
+            }
+          } else {
+            for (int y = y0; y < y0 + IntGrid::kTileSize; ++y) {
+              grid.update_ray({x0, y}, {x0 + IntGrid::kTileSize, y}, [k](int& cell) { cell += k + 1; });
+            }
+          }
+        }
+      });
+    }
+    for (std::thread& thread : threads) thread.join();
+    for (int k = 0; k < kCopies; ++k) {
+      const IntGrid& grid = copies[static_cast<std::size_t>(k)];
+      int wrong = 0;
+      for (int y = 0; y < kSide; ++y) {
+        for (int x = 0; x < kSide; ++x) wrong += grid.at({x, y}) != initial(x, y) + k + 1 ? 1 : 0;
+      }
+      EXPECT_EQ(wrong, 0) << "copy " << k << ", round " << round;
+      EXPECT_FALSE(grid.shares_tile_with(original, {0, 0}));
+      EXPECT_EQ(grid.tile_count(), 16u);
+    }
+    int changed = 0;
+    for (int y = 0; y < kSide; ++y) {
+      for (int x = 0; x < kSide; ++x) changed += original.at({x, y}) != initial(x, y) ? 1 : 0;
+    }
+    ASSERT_EQ(changed, 0) << "round " << round;
+  }
+}
+
+TEST(TiledGrid, TheLastOwnerOfATileWritesInPlace) {
+  // The copy that un-shares a tile leaves the other grid its only owner, which then writes the
+  // tile in place (the path TiledGrid::mutable_tile's acquire fence is on) without disturbing the copy.
+  IntGrid original;
+  original.mutable_at({0, 0}) = 1;
+  const int* tile_before = &original.at({0, 0});
+  IntGrid copy = original;
+  copy.mutable_at({0, 0}) = 2;                    // copies the tile
+  EXPECT_EQ(&original.mutable_at({0, 0}), tile_before);  // sole owner again: no copy
+  original.mutable_at({0, 0}) = 3;
+  EXPECT_EQ(copy.at({0, 0}), 2);
+  EXPECT_EQ(original.at({0, 0}), 3);
 }
 
 }  // namespace

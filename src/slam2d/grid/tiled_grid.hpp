@@ -8,11 +8,15 @@
 // particle filter can copy its maps cheaply. Reads of unwritten cells return the default value
 // and allocate nothing.
 //
-// Not thread-safe: a grid and its copies share tiles (and their reference counts), so write them
-// from one thread, or synchronise.
+// Threads: as for a standard container, const calls on one grid may run concurrently, and a
+// non-const call needs the grid to itself. Different grids may be read and written from different
+// threads at the same time even when they share tiles (particles of a filter updated in parallel);
+// the argument is at mutable_tile(). Copying or destroying a grid counts as a const call on the
+// grids it shares tiles with (it only moves reference counts, which are atomic).
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -137,6 +141,25 @@ Cell* TiledGrid<Cell, kLog2TileSize>::mutable_tile(CellIndex tile) {
     entry->cells.fill(default_value_);
   } else if (entry.use_count() > 1) {
     entry = std::make_shared<Tile>(*entry);  // copy-on-write
+  } else {
+    // This grid is the tile's only owner: it is written in place. Why that is safe while other
+    // threads work on other grids that shared this tile until a moment ago:
+    //  - A tile's owners are the tables of grids. Its count rises only when a grid is copied, and
+    //    the grid copied is then an owner, so a count that has reached 1 stays 1 until this thread
+    //    copies this grid; no other thread can reach the tile any more (they read tiles only
+    //    through their own grid's table, never through a pointer kept from another grid).
+    //  - While two grids own the tile, neither writes it (each sees a count >= 2 and copies), so
+    //    shared tiles are only ever read, and concurrent reads and copies of them are fine.
+    //  - What remains is ordering: another thread's last reads of the tile (its copy, its
+    //    matching) must happen before our writes. That thread released its reference with the
+    //    count's decrement, a release operation (libstdc++: acq_rel fetch_add; later decrements
+    //    continue its release sequence). use_count() is a relaxed load that read that decrement's
+    //    value (1), so this acquire fence makes the decrement synchronise with us: everything that
+    //    thread did with the tile happens before the writes below (C++20 [atomics.fences]/4).
+    // Two grids un-sharing one tile at the same time both copy it (both saw 2), or one copies and
+    // then the other writes in place (it saw 1); either way every grid gets the same cells, so the
+    // values do not depend on the schedule, only which grid keeps the old tile object does.
+    std::atomic_thread_fence(std::memory_order_acquire);
   }
   return entry->cells.data();
 }

@@ -1,5 +1,10 @@
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -10,7 +15,14 @@
 
 namespace slam2d {
 
+struct RbpfWorkers {
+  explicit RbpfWorkers(int threads) : arena(threads) {}
+  tbb::task_arena arena;  // max concurrency = the resolved thread count
+};
+
 namespace {
+
+constexpr int kMaxThreads = 256;
 
 bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
 
@@ -29,6 +41,7 @@ Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
 
 void validate(const RbpfConfig& config) {
   check(config.particles >= 1 && config.particles <= 10000, "RbpfConfig: particles must be in [1, 10000]");
+  check(config.threads >= 0 && config.threads <= kMaxThreads, "RbpfConfig: threads must be in [0, 256] (0: all)");
   check(non_negative(config.min_range) && std::isfinite(config.max_range) && config.max_range > config.min_range,
         "RbpfConfig: need 0 <= min_range < max_range");
   check(non_negative(config.update_distance) && non_negative(config.update_angle) &&
@@ -51,6 +64,9 @@ RbpfPathNode::~RbpfPathNode() {
 
 RbpfSlam::RbpfSlam(const RbpfConfig& config) : config_(config) {
   validate(config_);
+  const int threads = std::min(config_.threads == 0 ? tbb::info::default_concurrency() : config_.threads,
+                               config_.particles);
+  if (threads > 1) workers_ = std::make_shared<RbpfWorkers>(threads);
   particles_.reserve(static_cast<std::size_t>(config_.particles));
   const MapPyramid empty_map(map_config(config_));
   for (int i = 0; i < config_.particles; ++i) {
@@ -80,7 +96,7 @@ void RbpfSlam::initialise(const LaserScan& scan, const SE2& T_odom_robot) {
   }
 }
 
-void RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points,
+bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points,
                                const SE2& u) {
   RbpfParticle& particle = particles_[i];
   Rng rng = stream(config_.seed, stats_.updates, i);
@@ -99,9 +115,35 @@ void RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
   particle.T_map_robot = sample_pose(proposal, particle.map, points, predicted, sigmas, config_.proposal, rng, log_factor);
   particle.log_weight += log_factor;  // Eq. (19): w_t = w_{t-1} eta
   particle.accumulated_log_weight += log_factor;
-  if (!proposal.matched) ++stats_.fallbacks;
   particle.map.integrate_scan(scan, particle.T_map_robot);
+  // The previous node may be shared with other particles (resampling copies paths); moving it into
+  // the new node changes no reference count and frees nothing, so this is safe in parallel too.
   particle.path = std::make_shared<RbpfPathNode>(particle.T_map_robot, stats_.updates, std::move(particle.path));
+  return proposal.matched;
+}
+
+void RbpfSlam::update_particles(const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u) {
+  // Why the parallel loop gives the serial result bit for bit:
+  //  - Particle i reads and writes only particles_[i] and draws only from its own generator
+  //    stream(seed, update, i), so its computation is the same whatever runs beside it.
+  //  - Its map shares tiles with other particles' maps (copied at resampling); TiledGrid makes
+  //    concurrent reads and copy-on-write of shared tiles safe and schedule-independent in value
+  //    (see TiledGrid::mutable_tile). Its path's previous node may be shared: see update_particle.
+  //  - Nothing is accumulated across particles inside the loop: the fallback flags are counted,
+  //    and the weights normalised (resample_if_needed), serially in particle order afterwards.
+  //  - Nothing is freed in the loop (maps and paths are dropped at resampling, serially).
+  const std::size_t n = particles_.size();
+  std::vector<unsigned char> matched(n, 0);
+  if (!workers_) {
+    for (std::size_t i = 0; i < n; ++i) matched[i] = update_particle(i, scan, points, u) ? 1 : 0;
+  } else {
+    workers_->arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) matched[i] = update_particle(i, scan, points, u) ? 1 : 0;
+      });
+    });
+  }
+  for (const unsigned char m : matched) stats_.fallbacks += m ? 0 : 1;
 }
 
 bool RbpfSlam::resample_if_needed() {
@@ -166,7 +208,7 @@ RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
   } else if (needs_update(T_odom_robot, scan.stamp)) {
     const SE2 u = update_odometry_.back().between(T_odom_robot);
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
-    for (std::size_t i = 0; i < particles_.size(); ++i) update_particle(i, scan, points, u);
+    update_particles(scan, points, u);
     update_odometry_.push_back(T_odom_robot);
     last_update_stamp_ = scan.stamp;
     step.resampled = resample_if_needed();

@@ -15,7 +15,9 @@
 // resampling when N_eff < resample_threshold N (selective resampling, Sec. IV-B).
 //
 // Deterministic: particle i at update k draws from its own generator seeded from (seed, k, i),
-// the resampler from (seed, k), so the result depends only on the log and the seed.
+// the resampler from (seed, k), so the result depends only on the log and the seed, not on the
+// number of threads: the particles of an update are processed in parallel (TBB, `threads`), each
+// touching only its own state, and everything summed over particles is summed serially after.
 
 #include <cstddef>
 #include <cstdint>
@@ -33,6 +35,9 @@ namespace slam2d {
 struct RbpfConfig {
   int particles = 30;              // N, in [1, 10000]
   std::uint64_t seed = 1;          // of every random draw
+  // Threads for the particles of an update (proposal, weight, map update): 0 = all hardware
+  // threads (TBB's default concurrency), 1 = serial, at most 256. The result does not depend on it.
+  int threads = 0;
   // The particles' maps: Hector's pyramid (3 levels from 5 cm, p_hit 0.9, p_miss 0.4, no clearing
   // by no-return beams); grid.max_range is replaced by max_range below.
   MapPyramidConfig map{.levels = 3,
@@ -92,6 +97,8 @@ struct RbpfStats {
   double neff_min = 0.0;        // the smallest N_eff seen at an update (N before any)
 };
 
+struct RbpfWorkers;  // the TBB arena (rbpf_slam.cpp), kept out of this header
+
 struct RbpfStep {
   SE2 T_map_robot;         // the best particle's pose at the last update composed with the odometry since
   bool updated = false;    // this scan triggered an update
@@ -122,7 +129,11 @@ class RbpfSlam {
  private:
   bool needs_update(const SE2& T_odom_robot, double stamp) const;
   void initialise(const LaserScan& scan, const SE2& T_odom_robot);
-  void update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u);
+  /// Draws particle i's pose, updates its weight, map and path; false when the match was rejected
+  /// (fallback). Touches only particle i (and reads config_, stats_.updates): safe in parallel.
+  bool update_particle(std::size_t i, const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u);
+  /// update_particle for every particle, on config_.threads threads.
+  void update_particles(const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u);
   bool resample_if_needed();
 
   struct ScanRecord {
@@ -134,6 +145,7 @@ class RbpfSlam {
   SE2 corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot);
 
   RbpfConfig config_;
+  std::shared_ptr<RbpfWorkers> workers_;  // null when serial (threads resolve to 1)
   SE2 last_raw_odometry_;        // wheel odometry at the previous scan
   SE2 last_corrected_odometry_;  // scan-matched odometry at the previous scan
   std::vector<RbpfParticle> particles_;
