@@ -12,6 +12,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <thread>
 
 #include "scan_pair_fixture.hpp"
 #include "slam2d/core/angles.hpp"
@@ -358,6 +359,43 @@ TEST(PlIcpMatch, UnorderedTargetFallsBackToTheKdTree) {
   // Neighbours in a shuffled cloud are not neighbours on the surface: the segments are junk and
   // most pairs are dropped, so only the ordered target is expected to give the truth.
   EXPECT_TRUE(test::poses_near(ordered.T_target_source, pair.T_target_source, 0.01, 0.003));
+}
+
+// match_pl_icp keeps its buffers (the prepared target, the per-point state with the search
+// certificates) per thread from one match to the next: a match must give the same result, to the
+// last bit, whatever ran before it (a larger scan, a kd-tree target, a tiny cloud).
+bool same_result(const MatchResult& a, const MatchResult& b) {
+  return a.T_target_source.x() == b.T_target_source.x() && a.T_target_source.y() == b.T_target_source.y() &&
+         a.T_target_source.theta() == b.T_target_source.theta() && a.covariance == b.covariance &&
+         a.iterations == b.iterations && a.inliers == b.inliers && a.residual == b.residual &&
+         a.converged == b.converged && a.degenerate == b.degenerate;
+}
+
+TEST(PlIcpMatch, ResultDoesNotDependOnEarlierMatches) {
+  const ScanPair small = office_pair(SE2(0.2, -0.1, 0.1));
+  const ScanPair wide = make_scan_pair(testing::office_world(), {.T_world_target = SE2(7.0, 2.5, 0.3), .beams = 360,
+                                                                  .field_of_view = 1.9 * std::numbers::pi});
+  const ScanPair room = room_pair(SE2(-0.1, 0.15, -0.1), 3);
+  const SE2 guess(0.05, 0.05, 0.0);
+  const MatchResult first = match_pl_icp(small.target, small.source, guess);
+  EXPECT_TRUE(test::poses_near(first.T_target_source, small.T_target_source, 0.01, 0.003));
+  PointCloud2 shuffled = room.target;
+  std::mt19937 rng(7);
+  std::shuffle(shuffled.points.begin(), shuffled.points.end(), rng);
+  PointCloud2 tiny;
+  tiny.points = {Point2(1.0, 0.0), Point2(0.0, 1.0)};
+  PointCloud2 unit_weights = small.source;  // weights of 1 change nothing (the weighted code path)
+  unit_weights.weights.assign(unit_weights.size(), 1.0);
+  EXPECT_TRUE(same_result(match_pl_icp(small.target, unit_weights, guess), first));
+  match_pl_icp(wide.target, wide.source, SE2());                  // more points on both sides
+  match_pl_icp(shuffled, room.source, SE2());                      // the kd-tree
+  match_pl_icp(tiny, tiny, SE2());                                 // too few points
+  match_pl_icp(room.target, room.source, SE2(), {.outliers_remove_doubles = false});
+  EXPECT_TRUE(same_result(match_pl_icp(small.target, small.source, guess), first));
+  // And in the other order: the wide scan's result is the same as on a fresh thread.
+  MatchResult fresh;
+  std::thread([&] { fresh = match_pl_icp(wide.target, wide.source, SE2()); }).join();
+  EXPECT_TRUE(same_result(match_pl_icp(wide.target, wide.source, SE2()), fresh));
 }
 
 TEST(PlIcpMatch, EmptyAndTinyCloudsFailWithAHugeCovariance) {

@@ -44,19 +44,28 @@ struct SourcePair {
   int j1 = kNone, j2 = kNone;      // target (index) points of the segment, kNone: no pair
   TrackedNearest nearest;          // j1 across iterations, with its certificate
 
-  bool paired() const { return j1 != kNone && j2 != kNone; }
+  bool paired() const { return j2 != kNone; }  // j2 is kNone whenever j1 is
   void drop() { j2 = kNone; }
 };
 
-// Per-iteration state, sized once before the loop (no allocation inside it).
+// Per-iteration state, sized once before the loop (no allocation inside it); match_pl_icp keeps
+// one per thread across matches, with the prepared target.
 struct Workspace {
   std::vector<SourcePair> pairs;   // one per source point
-  std::vector<double> quantiles;   // scratch for Eq. (3)
+  std::vector<double> quantiles;   // scratch for Eq. (3), one slot per source point
+  std::size_t quantile_count = 0;  // the slots in use
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
   std::vector<Eigen::Vector3d> target_columns;  // per target point, for the covariance
 
-  Workspace(std::size_t sources, std::size_t targets) : pairs(sources), closest(targets), target_columns(targets) {
-    quantiles.reserve(sources);
+  Workspace() = default;
+  Workspace(std::size_t sources, std::size_t targets) { reset(sources, targets); }
+  // Sized for a match, reusing the buffers: no allocation once they are large enough.
+  void reset(std::size_t sources, std::size_t targets) {
+    pairs.assign(sources, SourcePair{});
+    quantiles.resize(sources);
+    closest.resize(targets);
+    target_columns.resize(targets);
+    quantile_count = 0;
   }
 };
 
@@ -81,46 +90,58 @@ struct SymmetricSum3 {
 };
 
 // Eq. (1) and (2), fused: move each source point, find its segment and its distance to it.
+// With `reject`, also the first rejections of Eq. (3), in the same pass: pairs whose segment is
+// too long are dropped, and ws.closest gets, per target point, the smallest distance of the
+// pairs on it (for the doubles). (j2 != kNone implies j1 != kNone: paired() tests j2 alone.)
+template <bool kReject>
 void find_correspondences(const TargetIndex& t, const PointCloud2& source, const SE2& T, const PlIcpConfig& config,
                           Workspace& ws) {
   const Eigen::Matrix2d R = T.rotation();
+  const Point2 translation = T.translation();
+  const double max_distance = config.max_correspondence_distance;
+  const double max_length = config.max_segment_length;
+  const bool doubles = kReject && config.outliers_remove_doubles;
+  if (doubles) std::fill(ws.closest.begin(), ws.closest.end(), std::numeric_limits<double>::infinity());
   int previous = kNone;  // the last j1 found: where a fresh walk starts (the source is a scan too)
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+  const std::size_t count = ws.pairs.size();
+  for (std::size_t i = 0; i < count; ++i) {
     SourcePair& s = ws.pairs[i];
-    s.moved = R * source.points[i] + T.translation();  // Eq. (1)
-    s.j1 = track_nearest(t, s.moved, config.max_correspondence_distance, s.nearest, previous);
-    if (s.j1 != kNone) previous = s.j1;
+    s.moved = R * source.points[i] + translation;  // Eq. (1)
+    s.j1 = track_nearest(t, s.moved, max_distance, s.nearest, previous);
     s.j2 = kNone;
     if (s.j1 == kNone) continue;
-    s.j2 = better_neighbour(t, s.moved, s.j1);
-    if (s.j2 == kNone) continue;
-    s.normal = t.segment_normals[std::min(s.j1, s.j2)];
+    previous = s.j1;
+    const int j2 = better_neighbour(t, s.moved, s.j1);
+    if (j2 == kNone) continue;
+    const int segment = std::min(s.j1, j2);
+    if (kReject && t.segment_lengths[segment] > max_length) continue;  // dropped: too long
+    s.j2 = j2;
+    s.normal = t.segment_normals[segment];
     s.distance = std::abs(s.normal.dot(s.moved - t.points[s.j1]));  // to the line, the metric of Eq. (4)
+    if (doubles) ws.closest[s.j1] = std::min(ws.closest[s.j1], s.distance);
   }
 }
 
-// Drops pairs whose segment is too long and, of the source points sharing a j1, all but the
-// closest; collects the distances of the rest into ws.quantiles.
-void drop_long_segments_and_doubles(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {
-  const bool doubles = config.outliers_remove_doubles;
-  if (doubles) std::fill(ws.closest.begin(), ws.closest.end(), std::numeric_limits<double>::infinity());
-  for (SourcePair& s : ws.pairs) {
-    if (!s.paired()) continue;
-    if (t.segment_lengths[std::min(s.j1, s.j2)] > config.max_segment_length) {
-      s.drop();
-    } else if (doubles) {
-      ws.closest[s.j1] = std::min(ws.closest[s.j1], s.distance);
+// Of the source points sharing a j1, drops all but the closest; collects the distances of the
+// rest into ws.quantiles (the long segments went in find_correspondences<true>).
+void drop_doubles(const PlIcpConfig& config, Workspace& ws) {
+  double* out = ws.quantiles.data();
+  std::size_t kept = 0;
+  if (config.outliers_remove_doubles) {
+    for (SourcePair& s : ws.pairs) {
+      if (!s.paired()) continue;
+      if (s.distance > ws.closest[s.j1]) {
+        s.drop();
+      } else {
+        out[kept++] = s.distance;
+      }
+    }
+  } else {
+    for (const SourcePair& s : ws.pairs) {
+      if (s.paired()) out[kept++] = s.distance;
     }
   }
-  ws.quantiles.clear();
-  for (SourcePair& s : ws.pairs) {
-    if (!s.paired()) continue;
-    if (doubles && s.distance > ws.closest[s.j1]) {
-      s.drop();
-    } else {
-      ws.quantiles.push_back(s.distance);
-    }
-  }
+  ws.quantile_count = kept;
 }
 
 // std::nth_element on values[lo, hi) for rank k (lo <= k < hi): afterwards values[k] is the
@@ -128,8 +149,7 @@ void drop_long_segments_and_doubles(const TargetIndex& t, const PlIcpConfig& con
 // branch-free partition: the distances come in no useful order, so a partition's branches would
 // mispredict about half the time. Ranges that shrink too slowly (many equal values) are left to
 // std::nth_element.
-double select_rank(std::vector<double>& values, std::size_t lo, std::size_t hi, std::size_t k) {
-  double* v = values.data();
+double select_rank(double* v, std::size_t lo, std::size_t hi, std::size_t k) {
   constexpr std::size_t kSmall = 12;
   int rounds_left = 40;
   while (hi - lo > kSmall && rounds_left-- > 0) {
@@ -160,9 +180,8 @@ double select_rank(std::vector<double>& values, std::size_t lo, std::size_t hi, 
 
 // Eq. (3): min(e_(maxPerc), mult * e_(order)), e_(f) the value at fraction f of the sorted
 // distances (CSM's hoare_selection at floor(n f)); one selection for the lower fraction, a
-// second on the part above it for the higher. `values` is non-empty and gets reordered.
-double trimming_limit(const PlIcpConfig& config, std::vector<double>& values) {
-  const std::size_t n = values.size();
+// second on the part above it for the higher. values[0, n) (n > 0) gets reordered.
+double trimming_limit(const PlIcpConfig& config, double* values, std::size_t n) {
   const auto rank = [n](double fraction) { return std::min(n - 1, static_cast<std::size_t>(fraction * static_cast<double>(n))); };
   const std::size_t trimmed = rank(config.outliers_max_fraction);
   const std::size_t adaptive = rank(config.outliers_adaptive_order);
@@ -182,11 +201,11 @@ struct Association {
 };
 
 // Eq. (3) and the other rejections: long segments, doubles, trimming.
-Association reject_outliers(const TargetIndex& t, const PlIcpConfig& config, Workspace& ws) {
-  drop_long_segments_and_doubles(t, config, ws);
+Association reject_outliers(const PlIcpConfig& config, Workspace& ws) {
+  drop_doubles(config, ws);
   Association association;
-  if (ws.quantiles.empty()) return association;
-  const double limit = trimming_limit(config, ws.quantiles);
+  if (ws.quantile_count == 0) return association;
+  const double limit = trimming_limit(config, ws.quantiles.data(), ws.quantile_count);
   for (SourcePair& s : ws.pairs) {
     if (s.paired() && s.distance > limit) s.drop();
     std::uint64_t pair = ~std::uint64_t{0};
@@ -201,33 +220,44 @@ Association reject_outliers(const TargetIndex& t, const PlIcpConfig& config, Wor
 
 double weight(const PointCloud2& source, std::size_t i) { return source.has_weights() ? source.weights[i] : 1.0; }
 
-// Eq. (4): the sum of add_term over the pairs, with the upper triangle of M in scalars.
+// Eq. (4): the sum of add_term over the pairs, with the upper triangle of M in scalars and g
+// gathered as sum w a b (times -2 at the end).
+template <bool kWeighted>
 PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {
   double m00 = 0, m01 = 0, m02 = 0, m03 = 0, m11 = 0, m12 = 0, m13 = 0, m22 = 0, m23 = 0, m33 = 0;
   double g0 = 0, g1 = 0, g2 = 0, g3 = 0, c = 0;
   std::size_t terms = 0;
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+  const std::size_t count = ws.pairs.size();
+  for (std::size_t i = 0; i < count; ++i) {
     const SourcePair& s = ws.pairs[i];
     if (!s.paired()) continue;
     const double nx = s.normal.x(), ny = s.normal.y(), px = s.moved.x(), py = s.moved.y();
     // a = (n_x, n_y, n^T p, n^T J p), b = n^T q (add_term).
     const double a2 = nx * px + ny * py, a3 = ny * px - nx * py;
-    const double w = weight(source, i);
-    const double b = nx * t.points[s.j1].x() + ny * t.points[s.j1].y();
-    const double w0 = w * nx, w1 = w * ny, w2 = w * a2, w3 = w * a3;
+    const Point2& q = t.points[s.j1];
+    const double b = nx * q.x() + ny * q.y();
+    double w0 = nx, w1 = ny, w2 = a2, w3 = a3, wb = b;
+    if constexpr (kWeighted) {
+      const double w = source.weights[i];
+      w0 *= w, w1 *= w, w2 *= w, w3 *= w, wb *= w;
+    }
     m00 += w0 * nx, m01 += w0 * ny, m02 += w0 * a2, m03 += w0 * a3;
     m11 += w1 * ny, m12 += w1 * a2, m13 += w1 * a3;
     m22 += w2 * a2, m23 += w2 * a3, m33 += w3 * a3;
-    g0 -= 2.0 * w0 * b, g1 -= 2.0 * w1 * b, g2 -= 2.0 * w2 * b, g3 -= 2.0 * w3 * b;
-    c += w * b * b;
+    g0 += w0 * b, g1 += w1 * b, g2 += w2 * b, g3 += w3 * b;
+    c += wb * b;
     ++terms;
   }
   PointToLineProblem problem;
   problem.M << m00, m01, m02, m03, m01, m11, m12, m13, m02, m12, m22, m23, m03, m13, m23, m33;
-  problem.g << g0, g1, g2, g3;
+  problem.g << -2.0 * g0, -2.0 * g1, -2.0 * g2, -2.0 * g3;
   problem.c = c;
   problem.terms = terms;
   return problem;
+}
+
+PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {
+  return source.has_weights() ? build_problem<true>(t, source, ws) : build_problem<false>(t, source, ws);
 }
 
 // Censi 2007, Eq. (6), for the point-to-line metric in closed form (the same quantity as
@@ -592,7 +622,7 @@ std::vector<Correspondence> pl_icp_correspondences(const PointCloud2& target, co
   std::vector<Correspondence> pairs;
   if (t.size() == 0) return pairs;
   Workspace ws(source.size(), t.points.size());
-  find_correspondences(t, source, T_target_source, config, ws);
+  find_correspondences<false>(t, source, T_target_source, config, ws);
   for (std::size_t i = 0; i < source.size(); ++i) {
     const SourcePair& s = ws.pairs[i];
     if (s.j1 == kNone) continue;
@@ -604,24 +634,27 @@ std::vector<Correspondence> pl_icp_correspondences(const PointCloud2& target, co
 MatchResult match_pl_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                          const PlIcpConfig& config) {
   validate(config);
-  const TargetIndex t = prepare_target(target, config.search);
+  // Per thread, reused from match to match: the buffers are allocated once (a few kB).
+  thread_local TargetIndex t;
+  thread_local Workspace ws;
+  thread_local std::vector<std::uint64_t> associations;
+  prepare_target(target, config.search, t);
   if (t.size() < 3 || source.size() < 3) {  // nothing to match: the guess, unconverged, huge covariance
     MatchResult result;
     result.T_target_source = T_target_source_guess;
     apply(analyze_degeneracy(target, source, T_target_source_guess, {}), result);
     return result;
   }
-  Workspace ws(source.size(), t.points.size());
+  ws.reset(source.size(), t.points.size());
   SE2 T = T_target_source_guess;
   bool converged = false;
   bool associated_at_T = false;
   int iteration = 0;
-  std::vector<std::uint64_t> associations;
-  associations.reserve(static_cast<std::size_t>(config.max_iterations));
+  associations.clear();
   while (iteration < config.max_iterations && !converged) {
     ++iteration;
-    find_correspondences(t, source, T, config, ws);                                             // Eq. (1)-(2)
-    const Association association = reject_outliers(t, config, ws);                             // Eq. (3)
+    find_correspondences<true>(t, source, T, config, ws);                                       // Eq. (1)-(3)
+    const Association association = reject_outliers(config, ws);                                // Eq. (3)
     if (association.kept < static_cast<std::size_t>(config.min_correspondences)) break;
     if (std::find(associations.begin(), associations.end(), association.hash) != associations.end()) {
       converged = true;  // a fixed point or a cycle of associations: nothing new to learn

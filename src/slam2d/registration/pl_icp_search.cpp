@@ -259,6 +259,18 @@ int kd_tree_closest(const TargetIndex& t, const Point2& p, double max_squared) {
 
 TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search) {
   TargetIndex t;
+  prepare_target(target, search, t);
+  return t;
+}
+
+void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& t) {
+  t.original.clear();
+  t.points.clear();
+  t.directions.clear();
+  t.ranges.clear();
+  t.ordered = false;
+  t.gap_center = 0.0;
+  t.tree.reset();
   t.original.reserve(target.size());
   t.points.reserve(target.size());
   t.directions.reserve(target.size());
@@ -287,7 +299,6 @@ TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search) {
     t.ordered = false;
     t.tree = std::make_unique<KdTree2>(t.points);
   }
-  return t;
 }
 
 int search_and_track(const TargetIndex& t, const Point2& p, double max_distance, TrackedNearest& tracked, int start) {

@@ -50,6 +50,8 @@ struct TargetIndex {
 /// The usable target points (range >= kMinRange, finite) and the index `search` asks for; an
 /// unordered target gets the kd-tree whatever `search` says.
 TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search);
+/// The same into `t`, reusing its buffers (no allocation once they are large enough).
+void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& t);
 
 /// A source point's closest target point across iterations, with its certificate.
 struct TrackedNearest {
