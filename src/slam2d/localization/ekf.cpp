@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -21,7 +22,7 @@ void validate(const EkfConfig& config) {
             config.matcher.sigma > 0.0,
         "ekf: matcher settings must be positive");
   check(config.min_window_xy > 0.0 && config.max_window_xy >= config.min_window_xy && config.min_window_theta > 0.0 &&
-            config.max_window_theta >= config.min_window_theta && config.max_window_theta <= 3.14159,
+            config.max_window_theta >= config.min_window_theta && config.max_window_theta <= std::numbers::pi,
         "ekf: need 0 < min_window <= max_window (theta at most pi)");
   check(config.angular_step > 0.0 && config.table_sigma > 0.0, "ekf: angular_step and table_sigma must be > 0");
 }
