@@ -6,8 +6,6 @@ namespace slam2d {
 
 namespace {
 
-using CellGrid = TiledGrid<OccupancyCell>;
-
 // P(occupied) in single precision (expf is several times faster than exp; the cells hold float
 // log-odds anyway): within 1e-7 of probability_from_log_odds.
 double cell_probability(const OccupancyCell& cell) {
@@ -40,26 +38,8 @@ BilinearSample interpolate_occupancy(const OccupancyGrid& grid, const Eigen::Vec
   const GridGeometry& geometry = grid.geometry();
   if (!geometry.in_index_range(point, GridGeometry::kMaxCellIndex - 2.0)) return {0.5, Eigen::Vector2d::Zero()};
   const BilinearCorner c = bilinear_corner(geometry, point);
-  const CellIndex i = c.cell;
-  const CellGrid& cells = grid.cells();
-  constexpr int kMask = CellGrid::kTileSize - 1;
-  double m00, m10, m01, m11;
-  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
-    // Fast path: the four cells share a tile (63 squares in 64 along each axis).
-    const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
-    if (tile == nullptr) return {0.5, Eigen::Vector2d::Zero()};
-    const int offset = CellGrid::offset_in_tile(i);
-    m00 = cell_probability(tile->cells[offset]);
-    m10 = cell_probability(tile->cells[offset + 1]);
-    m01 = cell_probability(tile->cells[offset + CellGrid::kTileSize]);
-    m11 = cell_probability(tile->cells[offset + CellGrid::kTileSize + 1]);
-  } else {
-    m00 = cell_probability(cells.at(i));
-    m10 = cell_probability(cells.at({i.x + 1, i.y}));
-    m01 = cell_probability(cells.at({i.x, i.y + 1}));
-    m11 = cell_probability(cells.at({i.x + 1, i.y + 1}));
-  }
-  return bilinear_blend(m00, m10, m01, m11, c.fraction, geometry.resolution);
+  const std::array<double, 4> m = occupancy_corners(grid, c.cell, cell_probability);
+  return bilinear_blend(m[0], m[1], m[2], m[3], c.fraction, geometry.resolution);
 }
 
 }  // namespace slam2d

@@ -13,6 +13,7 @@
 // inside each square (it jumps across the lines joining cell centres, as in the paper).
 
 #include <Eigen/Core>
+#include <array>
 
 #include "slam2d/grid/grid_geometry.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
@@ -44,6 +45,26 @@ BilinearSample interpolate_bilinear(const GridGeometry& geometry, ValueOf&& valu
   const CellIndex i = c.cell;
   return bilinear_blend(value_of(i), value_of(CellIndex{i.x + 1, i.y}), value_of(CellIndex{i.x, i.y + 1}),
                         value_of(CellIndex{i.x + 1, i.y + 1}), c.fraction, geometry.resolution);
+}
+
+/// The corner values m00, m10, m01, m11 of the interpolation square with base cell i of an
+/// occupancy grid, each cell read as probability_of(const OccupancyCell&). The four cells are read
+/// from one tile when they share it (63 squares in 64 along each axis); a missing tile reads 0.5.
+template <typename ProbabilityOf>
+std::array<double, 4> occupancy_corners(const OccupancyGrid& grid, CellIndex i, ProbabilityOf&& probability_of) {
+  using CellGrid = TiledGrid<OccupancyCell>;
+  constexpr int kMask = CellGrid::kTileSize - 1;
+  const CellGrid& cells = grid.cells();
+  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
+    const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
+    if (tile == nullptr) return {0.5, 0.5, 0.5, 0.5};
+    const int offset = CellGrid::offset_in_tile(i);
+    return {probability_of(tile->cells[offset]), probability_of(tile->cells[offset + 1]),
+            probability_of(tile->cells[offset + CellGrid::kTileSize]),
+            probability_of(tile->cells[offset + CellGrid::kTileSize + 1])};
+  }
+  return {probability_of(cells.at(i)), probability_of(cells.at({i.x + 1, i.y})), probability_of(cells.at({i.x, i.y + 1})),
+          probability_of(cells.at({i.x + 1, i.y + 1}))};
 }
 
 /// Eq. (4)-(6) over the occupancy probability of a grid (0.5 in unknown cells): Hector's map

@@ -172,10 +172,10 @@ void MonteCarloLocalization::weigh_recovery(const ScanBeams& beams, const SetLik
   weighted_pose_statistics(recovery_, recovery_weights_, &mean, &covariance);
   const double sigma_xy = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance.topLeftCorner<2, 2>()).eigenvalues().maxCoeff());
   const bool compact = sigma_xy <= config_.status.max_sigma_xy && std::sqrt(covariance(2, 2)) <= config_.status.max_sigma_theta;
-  const bool plausible =
-      compact && map_.plausibility(beams.points_robot, mean, config_.status.plausibility_distance) >= config_.status.min_plausibility;
   recovery_better_ = recovery.weighted > tracked.weighted;
-  recovery_wins_ = plausible && recovery_better_ ? recovery_wins_ + 1 : 0;
+  const bool wins = recovery_better_ && compact &&
+                    map_.plausibility(beams.points_robot, mean, config_.status.plausibility_distance) >= config_.status.min_plausibility;
+  recovery_wins_ = wins ? recovery_wins_ + 1 : 0;
   if (recovery_wins_ < config_.takeover_updates) return;
   particles_.swap(recovery_);
   weights_.swap(recovery_weights_);

@@ -13,8 +13,6 @@ namespace slam2d {
 
 namespace {
 
-using CellGrid = TiledGrid<OccupancyCell>;
-
 bool positive(double value) { return std::isfinite(value) && value > 0.0; }
 bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
 
@@ -103,9 +101,7 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
   // The same value as interpolate_occupancy (grid/bilinear.hpp), without its gradient and with the
   // logistic function read from a table: this loop is most of the filter's time.
   const GridGeometry& geometry = grid.geometry();
-  const CellGrid& cells = grid.cells();
   const double inverse_resolution = 1.0 / geometry.resolution;
-  constexpr int kMask = CellGrid::kTileSize - 1;
   double sum = 0.0;
   std::size_t used = 0;
   for (std::size_t k = 0; k < points_robot.size(); k += stride, ++used) {
@@ -118,24 +114,7 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
       const CellIndex i{GridGeometry::floor_to_int(u), GridGeometry::floor_to_int(v)};
       const double fx = u - i.x;
       const double fy = v - i.y;
-      double m00, m10, m01, m11;
-      if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
-        const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
-        if (tile == nullptr) {
-          m00 = m10 = m01 = m11 = 0.5;
-        } else {
-          const int offset = CellGrid::offset_in_tile(i);
-          m00 = table_probability(tile->cells[offset]);
-          m10 = table_probability(tile->cells[offset + 1]);
-          m01 = table_probability(tile->cells[offset + CellGrid::kTileSize]);
-          m11 = table_probability(tile->cells[offset + CellGrid::kTileSize + 1]);
-        }
-      } else {
-        m00 = table_probability(cells.at(i));
-        m10 = table_probability(cells.at({i.x + 1, i.y}));
-        m01 = table_probability(cells.at({i.x, i.y + 1}));
-        m11 = table_probability(cells.at({i.x + 1, i.y + 1}));
-      }
+      const auto [m00, m10, m01, m11] = occupancy_corners(grid, i, table_probability);
       value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
     }
     const double r = 1.0 - value;
