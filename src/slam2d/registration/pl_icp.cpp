@@ -14,6 +14,7 @@
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/degeneracy.hpp"
+#include "slam2d/registration/order_statistics.hpp"
 #include "slam2d/registration/pl_icp_search.hpp"
 
 namespace slam2d {
@@ -48,24 +49,37 @@ struct SourcePair {
   void drop() { j2 = kNone; }
 };
 
+// Sums of x, y, x^2, x y, y^2 over a run of points; as prefix sums over the target, the scatter of
+// any window in O(1).
+struct PointMoments {
+  double x = 0.0, y = 0.0, xx = 0.0, xy = 0.0, yy = 0.0;
+
+  PointMoments plus(const Point2& p) const {
+    return {x + p.x(), y + p.y(), xx + p.x() * p.x(), xy + p.x() * p.y(), yy + p.y() * p.y()};
+  }
+  PointMoments minus(const PointMoments& o) const { return {x - o.x, y - o.y, xx - o.xx, xy - o.xy, yy - o.yy}; }
+};
+
 // Per-iteration state, sized once before the loop (no allocation inside it); match_pl_icp keeps
 // one per thread across matches, with the prepared target.
 struct Workspace {
   std::vector<SourcePair> pairs;   // one per source point
-  std::vector<double> quantiles;   // scratch for Eq. (3), one slot per source point
-  std::size_t quantile_count = 0;  // the slots in use
+  std::vector<double> distances;   // Eq. (3)'s order statistics (BucketSelector), one slot per source point
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
   std::vector<Eigen::Vector3d> target_columns;  // per target point, for the covariance
+  std::vector<PointMoments> target_moments;     // prefix sums over the target, for the fitted normals
+  std::vector<std::uint8_t> distance_buckets;   // BucketSelector's buffers
+  std::vector<double> selection_scratch;
 
   Workspace() = default;
   Workspace(std::size_t sources, std::size_t targets) { reset(sources, targets); }
   // Sized for a match, reusing the buffers: no allocation once they are large enough.
   void reset(std::size_t sources, std::size_t targets) {
     pairs.assign(sources, SourcePair{});
-    quantiles.resize(sources);
+    distances.resize(sources);
     closest.resize(targets);
     target_columns.resize(targets);
-    quantile_count = 0;
+    target_moments.resize(targets + 1);
   }
 };
 
@@ -101,95 +115,75 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
   const double max_distance = config.max_correspondence_distance;
   const double max_length = config.max_segment_length;
   const bool doubles = kReject && config.outliers_remove_doubles;
-  if (doubles) std::fill(ws.closest.begin(), ws.closest.end(), std::numeric_limits<double>::infinity());
+  // Raw pointers held in locals: Eigen's packet stores may alias anything, and would otherwise
+  // make every vector's data pointer be reloaded after each store into a pair.
+  const Point2* const sources = source.points.data();
+  const Point2* const targets = t.points.data();
+  const double* const segment_lengths = t.segment_lengths.data();
+  const Point2* const segment_normals = t.segment_normals.data();
+  double* const closest = ws.closest.data();
+  SourcePair* const pairs = ws.pairs.data();
+  const int target_count = t.size();
+  if (doubles) std::fill(closest, closest + target_count, std::numeric_limits<double>::infinity());
   int previous = kNone;  // the last j1 found: where a fresh walk starts (the source is a scan too)
   const std::size_t count = ws.pairs.size();
   for (std::size_t i = 0; i < count; ++i) {
-    SourcePair& s = ws.pairs[i];
-    s.moved = R * source.points[i] + translation;  // Eq. (1)
-    s.j1 = track_nearest(t, s.moved, max_distance, s.nearest, previous);
+    SourcePair& s = pairs[i];
+    const Point2 moved = R * sources[i] + translation;  // Eq. (1)
+    const int j1 = track_nearest(t, moved, max_distance, s.nearest, previous);
+    s.moved = moved;
+    s.j1 = j1;
     s.j2 = kNone;
-    if (s.j1 == kNone) continue;
-    previous = s.j1;
-    const int j2 = better_neighbour(t, s.moved, s.j1);
-    if (j2 == kNone) continue;
-    const int segment = std::min(s.j1, j2);
-    if (kReject && t.segment_lengths[segment] > max_length) continue;  // dropped: too long
+    if (j1 == kNone) continue;
+    previous = j1;
+    // j2: the closer of j1's scan neighbours.
+    int j2 = j1 + 1;
+    if (j1 == 0) {
+      if (j2 >= target_count) continue;
+    } else if (j2 >= target_count || (targets[j1 - 1] - moved).squaredNorm() <= (targets[j2] - moved).squaredNorm()) {
+      j2 = j1 - 1;
+    }
+    const int segment = std::min(j1, j2);
+    if (kReject && segment_lengths[segment] > max_length) continue;  // dropped: too long
+    const Point2 normal = segment_normals[segment];
+    const double distance = std::abs(normal.dot(moved - targets[j1]));  // to the line, the metric of Eq. (4)
     s.j2 = j2;
-    s.normal = t.segment_normals[segment];
-    s.distance = std::abs(s.normal.dot(s.moved - t.points[s.j1]));  // to the line, the metric of Eq. (4)
-    if (doubles) ws.closest[s.j1] = std::min(ws.closest[s.j1], s.distance);
+    s.normal = normal;
+    s.distance = distance;
+    if (doubles) closest[j1] = std::min(closest[j1], distance);
   }
 }
 
 // Of the source points sharing a j1, drops all but the closest; collects the distances of the
-// rest into ws.quantiles (the long segments went in find_correspondences<true>).
-void drop_doubles(const PlIcpConfig& config, Workspace& ws) {
-  double* out = ws.quantiles.data();
+// rest into ws.distances and returns their count (the long segments went in
+// find_correspondences<true>).
+std::size_t drop_doubles(const PlIcpConfig& config, Workspace& ws) {
+  double* const out = ws.distances.data();
+  const double* const closest = ws.closest.data();
   std::size_t kept = 0;
-  if (config.outliers_remove_doubles) {
-    for (SourcePair& s : ws.pairs) {
-      if (!s.paired()) continue;
-      if (s.distance > ws.closest[s.j1]) {
-        s.drop();
-      } else {
-        out[kept++] = s.distance;
-      }
-    }
-  } else {
-    for (const SourcePair& s : ws.pairs) {
-      if (s.paired()) out[kept++] = s.distance;
-    }
-  }
-  ws.quantile_count = kept;
-}
-
-// std::nth_element on values[lo, hi) for rank k (lo <= k < hi): afterwards values[k] is the
-// k-th smallest, with none larger before it and none smaller after. Quickselect with a
-// branch-free partition: the distances come in no useful order, so a partition's branches would
-// mispredict about half the time. Ranges that shrink too slowly (many equal values) are left to
-// std::nth_element.
-double select_rank(double* v, std::size_t lo, std::size_t hi, std::size_t k) {
-  constexpr std::size_t kSmall = 12;
-  int rounds_left = 40;
-  while (hi - lo > kSmall && rounds_left-- > 0) {
-    const std::size_t mid = lo + (hi - lo) / 2;  // median of three as the pivot, moved to the end
-    if (v[mid] < v[lo]) std::swap(v[mid], v[lo]);
-    if (v[hi - 1] < v[mid]) std::swap(v[hi - 1], v[mid]);
-    if (v[mid] < v[lo]) std::swap(v[mid], v[lo]);
-    std::swap(v[mid], v[hi - 1]);
-    const double pivot = v[hi - 1];
-    std::size_t store = lo;  // v[lo, store) < pivot <= v[store, i)
-    for (std::size_t i = lo; i + 1 < hi; ++i) {
-      const double x = v[i];
-      v[i] = v[store];
-      v[store] = x;
-      store += x < pivot ? 1 : 0;
-    }
-    std::swap(v[store], v[hi - 1]);
-    if (k == store) return v[k];
-    if (k < store) {
-      hi = store;
+  for (SourcePair& s : ws.pairs) {
+    if (!s.paired()) continue;
+    if (config.outliers_remove_doubles && s.distance > closest[s.j1]) {
+      s.drop();
     } else {
-      lo = store + 1;
+      out[kept++] = s.distance;
     }
   }
-  std::nth_element(v + lo, v + k, v + hi);
-  return v[k];
+  return kept;
 }
 
 // Eq. (3): min(e_(maxPerc), mult * e_(order)), e_(f) the value at fraction f of the sorted
-// distances (CSM's hoare_selection at floor(n f)); one selection for the lower fraction, a
-// second on the part above it for the higher. values[0, n) (n > 0) gets reordered.
-double trimming_limit(const PlIcpConfig& config, double* values, std::size_t n) {
+// distances (CSM's hoare_selection at floor(n f)); n > 0 distances in ws.distances.
+double trimming_limit(const PlIcpConfig& config, std::size_t n, Workspace& ws) {
   const auto rank = [n](double fraction) { return std::min(n - 1, static_cast<std::size_t>(fraction * static_cast<double>(n))); };
   const std::size_t trimmed = rank(config.outliers_max_fraction);
   const std::size_t adaptive = rank(config.outliers_adaptive_order);
-  const std::size_t lower = std::min(trimmed, adaptive);
-  const std::size_t upper = std::max(trimmed, adaptive);
-  select_rank(values, 0, n, lower);
-  if (upper != lower) select_rank(values, lower + 1, n, upper);
-  return std::min(values[trimmed], config.outliers_adaptive_mult * values[adaptive]);
+  const BucketSelector selector(config.max_correspondence_distance);
+  const auto [lower, upper] = selector.ranks(ws.distances.data(), n, std::min(trimmed, adaptive),
+                                             std::max(trimmed, adaptive), ws.distance_buckets, ws.selection_scratch);
+  const double trimmed_value = adaptive <= trimmed ? upper : lower;
+  const double adaptive_value = adaptive <= trimmed ? lower : upper;
+  return std::min(trimmed_value, config.outliers_adaptive_mult * adaptive_value);
 }
 
 // The pairs kept, and a hash of the association (j1, j2 per source point): when an association
@@ -202,10 +196,10 @@ struct Association {
 
 // Eq. (3) and the other rejections: long segments, doubles, trimming.
 Association reject_outliers(const PlIcpConfig& config, Workspace& ws) {
-  drop_doubles(config, ws);
+  const std::size_t kept = drop_doubles(config, ws);
   Association association;
-  if (ws.quantile_count == 0) return association;
-  const double limit = trimming_limit(config, ws.quantiles.data(), ws.quantile_count);
+  if (kept == 0) return association;
+  const double limit = trimming_limit(config, kept, ws);
   for (SourcePair& s : ws.pairs) {
     if (s.paired() && s.distance > limit) s.drop();
     std::uint64_t pair = ~std::uint64_t{0};
@@ -274,42 +268,57 @@ PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source
 Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& source, const SE2& T,
                                      Workspace& ws, double range_sigma) {
   const Eigen::Matrix2d R = T.rotation();
-  const auto perpendicular = [](const Point2& v) { return Point2(-v.y(), v.x()); };
   SymmetricSum3 hessian, spread_sum;
   double curvature = 0.0;  // the e da/dx part of H(2, 2)
-  std::vector<Eigen::Vector3d>& target_columns = ws.target_columns;
-  std::fill(target_columns.begin(), target_columns.end(), Eigen::Vector3d::Zero());
+  // Raw pointers in locals: the column updates are Eigen packet stores, which may alias anything.
+  Eigen::Vector3d* const target_columns = ws.target_columns.data();
+  std::fill(target_columns, target_columns + t.size(), Eigen::Vector3d::Zero());
+  const SourcePair* const source_pairs = ws.pairs.data();
+  const Point2* const sources = source.points.data();
+  const Point2* const targets = t.points.data();
+  const Point2* const directions = t.directions.data();
+  const double* const segment_lengths = t.segment_lengths.data();
+  const std::size_t count = ws.pairs.size();
   std::size_t pairs = 0;
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
-    const SourcePair& s = ws.pairs[i];
+  const double tx = T.x(), ty = T.y(), c = R(0, 0), sn = R(1, 0);
+  for (std::size_t i = 0; i < count; ++i) {
+    const SourcePair& s = source_pairs[i];
     if (!s.paired()) continue;
     ++pairs;
-    const Point2& q1 = t.points[s.j1];
-    const Point2 d = t.points[s.j2] - q1;
-    const double length = d.norm();
+    // The segment (q1, q2) from the target's tables: n = J d / |d| is its stored normal, turned
+    // when q2 comes before q1 in the scan.
+    const int segment = std::min(s.j1, s.j2);
+    const double length = segment_lengths[segment];
     if (!(length > 1e-12)) continue;
-    const Point2 along = d * (1.0 / length);
-    const Point2 n = perpendicular(along);
-    const Point2& p = source.points[i];
-    const Point2 Rp = R * p;
-    const Point2 dRp = perpendicular(Rp);  // d(R p)/d theta
-    const Point2 offset = Rp + T.translation() - q1;
-    const double e = n.dot(offset);
+    const double inverse_length = 1.0 / length;
+    const double nx = s.j2 > s.j1 ? s.normal.x() : -s.normal.x();
+    const double ny = s.j2 > s.j1 ? s.normal.y() : -s.normal.y();  // along = d / |d| = (ny, -nx)
+    const Point2& q1 = targets[s.j1];
+    const Point2& p = sources[i];
+    const double rpx = c * p.x() - sn * p.y(), rpy = sn * p.x() + c * p.y();  // R p; d(R p)/d theta = (-rpy, rpx)
+    const double ox = rpx + tx - q1.x(), oy = rpy + ty - q1.y();            // offset = R p + t - q1
+    const double e = nx * ox + ny * oy;
     const double w2 = 2.0 * weight(source, i);
-    const Eigen::Vector3d a(n.x(), n.y(), n.dot(dRp));
-    hessian.add(a, w2);
-    curvature -= w2 * e * n.dot(Rp);
-    const auto column = [&](double de, const Point2& dn, double dn_theta) -> Eigen::Vector3d {
-      return w2 * (de * a + e * Eigen::Vector3d(dn.x(), dn.y(), dn_theta));
+    const double a2 = ny * rpx - nx * rpy;  // n^T d(R p)/d theta
+    hessian.add(Eigen::Vector3d(nx, ny, a2), w2);
+    curvature -= w2 * e * (nx * rpx + ny * rpy);
+    // d2J/dz dx = w2 (de/dz a + e (dn/dz, dn/dz^T d(R p)/d theta)), a = (nx, ny, a2).
+    const auto column = [&](double de, double dnx, double dny) -> Eigen::Vector3d {
+      return Eigen::Vector3d(w2 * (de * nx + e * dnx), w2 * (de * ny + e * dny),
+                             w2 * (de * a2 + e * (dny * rpx - dnx * rpy)));
     };
+    // The source range moves p along its bearing u: de = n^T R u, and n^T J R u for the angle.
     const double range = p.norm();
-    const Point2 Ru = range > 1e-12 ? Point2(Rp * (1.0 / range)) : Point2::Zero();
-    spread_sum.add(column(n.dot(Ru), Point2::Zero(), n.dot(perpendicular(Ru))));
-    const double beta1 = n.dot(t.directions[s.j1]);
-    const Point2 dn1 = (beta1 / length) * along;
-    target_columns[s.j1] += column(beta1 * (along.dot(offset) / length - 1.0), dn1, dn1.dot(dRp));
-    const Point2 dn2 = -(n.dot(t.directions[s.j2]) / length) * along;
-    target_columns[s.j2] += column(dn2.dot(offset), dn2, dn2.dot(dRp));
+    const double inverse_range = range > 1e-12 ? 1.0 / range : 0.0;
+    const double de = (nx * rpx + ny * rpy) * inverse_range;
+    const double dn_theta = (ny * rpx - nx * rpy) * inverse_range;
+    spread_sum.add(Eigen::Vector3d(w2 * de * nx, w2 * de * ny, w2 * (de * a2 + e * dn_theta)));
+    // The target ranges move q1 and q2 along their bearings u1, u2: dn = -+(n^T dq / |d|) along.
+    const double beta1 = (nx * directions[s.j1].x() + ny * directions[s.j1].y()) * inverse_length;
+    const double along_offset = (ny * ox - nx * oy) * inverse_length;
+    target_columns[s.j1] += column(beta1 * length * (along_offset - 1.0), beta1 * ny, -beta1 * nx);
+    const double beta2 = (nx * directions[s.j2].x() + ny * directions[s.j2].y()) * inverse_length;
+    target_columns[s.j2] += column(-beta2 * (ny * ox - nx * oy), -beta2 * ny, beta2 * nx);
   }
   Eigen::Matrix3d H = hessian.matrix();
   H(2, 2) += curvature;
@@ -320,7 +329,7 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     return Covariance3::Identity() * 1e6;
   }
   const Eigen::Matrix3d H_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
-  for (const Eigen::Vector3d& c : target_columns) spread_sum.add(c);
+  for (int k = 0; k < t.size(); ++k) spread_sum.add(target_columns[k]);
   const Eigen::Matrix3d spread = spread_sum.matrix() * (range_sigma * range_sigma);
   const Covariance3 covariance = H_inverse * spread * H_inverse;
   if (!covariance.allFinite()) return Covariance3::Identity() * 1e6;
@@ -330,28 +339,22 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
 // The unit normal of the total least squares line through target point k and up to
 // kNormalHalfWindow neighbours on either side (stopping at gaps longer than max_gap), for the
 // Fisher information: a two-point segment's normal is too noisy near the sensor to tell a
-// corridor from a room. Closed form: the eigenvector of the scatter's smaller eigenvalue.
+// corridor from a room. Closed form: the eigenvector of the scatter's smaller eigenvalue, the
+// scatter from the prefix sums `moments` of the target points (moments[k] sums points [0, k); in
+// absolute coordinates: with ranges of tens of metres the scatter keeps about 1e-11 m^2, the
+// normal's direction 1e-9 rad).
 constexpr int kNormalHalfWindow = 3;
 
-Point2 fitted_normal(const TargetIndex& t, int k, double max_gap) {
+Point2 fitted_normal(const TargetIndex& t, const std::vector<PointMoments>& moments, int k, double max_gap) {
   int lo = k, hi = k;
   while (lo > 0 && k - lo < kNormalHalfWindow && t.segment_lengths[lo - 1] <= max_gap) --lo;
   while (hi + 1 < t.size() && hi - k < kNormalHalfWindow && t.segment_lengths[hi] <= max_gap) ++hi;
   if (hi - lo < 2) return Point2::Zero();
-  // One pass over the window, relative to point k (small numbers: no cancellation to fear).
-  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
-  for (int j = lo; j <= hi; ++j) {
-    const Point2 v = t.points[j] - t.points[k];
-    sx += v.x();
-    sy += v.y();
-    sxx += v.x() * v.x();
-    sxy += v.x() * v.y();
-    syy += v.y() * v.y();
-  }
+  const PointMoments sum = moments[hi + 1].minus(moments[lo]);
   const double inverse_count = 1.0 / static_cast<double>(hi - lo + 1);
-  sxx -= sx * sx * inverse_count;
-  sxy -= sx * sy * inverse_count;
-  syy -= sy * sy * inverse_count;
+  const double sxx = sum.xx - sum.x * sum.x * inverse_count;
+  const double sxy = sum.xy - sum.x * sum.y * inverse_count;
+  const double syy = sum.yy - sum.y * sum.y * inverse_count;
   const double smallest = 0.5 * (sxx + syy) - std::sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy);
   const Point2 a(sxy, smallest - sxx), b(smallest - syy, sxy);
   const Point2 normal = a.squaredNorm() >= b.squaredNorm() ? a : b;
@@ -361,17 +364,20 @@ Point2 fitted_normal(const TargetIndex& t, int k, double max_gap) {
 // Degeneracy (degeneracy.hpp) from the final pairs, with fitted normals at their j1: the Fisher
 // information that analyze_degeneracy sums for these pairs, here without copying the target.
 DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, const TargetIndex& t,
-                                     const Workspace& ws, const PlIcpConfig& config) {
+                                     Workspace& ws, const PlIcpConfig& config) {
   const DegeneracyConfig degeneracy{.range_sigma = config.range_sigma};
   const double inverse_variance = 1.0 / (config.range_sigma * config.range_sigma);
   const Eigen::Matrix2d R = T.rotation();
   SymmetricSum3 information_sum;
   double squared_radius_sum = 0.0;
   std::size_t used = 0;
+  std::vector<PointMoments>& moments = ws.target_moments;
+  moments[0] = {};
+  for (int k = 0; k < t.size(); ++k) moments[k + 1] = moments[k].plus(t.points[k]);
   for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
     const SourcePair& s = ws.pairs[i];
     if (!s.paired()) continue;
-    const Point2 n = fitted_normal(t, s.j1, config.max_segment_length);
+    const Point2 n = fitted_normal(t, moments, s.j1, config.max_segment_length);
     if (!(n.squaredNorm() > 0.5)) continue;  // no fitted normal (has_normal)
     const Point2 Rp = R * source.points[i];
     const Eigen::Vector3d a(n.x(), n.y(), n.dot(Point2(-Rp.y(), Rp.x())));

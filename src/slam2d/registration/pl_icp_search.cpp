@@ -190,7 +190,7 @@ double beyond_bound(const TargetIndex& t, const Query& q, int j) {
 // The fast path: every point in a window of the scan around `center`, without a branch, then
 // the bounds for the points outside it. True (and j1, clearance) when those bounds settle it;
 // false leaves it to the walk.
-constexpr int kWindowHalfWidth = 4;
+constexpr int kWindowHalfWidth = 3;
 
 bool window_closest(const TargetIndex& t, const Query& q, int center, double max_squared, int& index,
                     double& clearance) {

@@ -87,13 +87,4 @@ inline int track_nearest(const TargetIndex& t, const Point2& p, double max_dista
   return search_and_track(t, p, max_distance, tracked, start);
 }
 
-/// The closer of j1's two scan neighbours (kNone if it has none).
-inline int better_neighbour(const TargetIndex& t, const Point2& p, int j1) {
-  const int below = j1 - 1;
-  const int above = j1 + 1;
-  if (below < 0) return above < t.size() ? above : kNone;
-  if (above >= t.size()) return below;
-  return (t.points[below] - p).squaredNorm() <= (t.points[above] - p).squaredNorm() ? below : above;
-}
-
 }  // namespace slam2d::pl_icp_detail
