@@ -30,22 +30,6 @@ using testing::ScanPairOptions;
 
 constexpr double kPi = std::numbers::pi;
 
-TEST(PlIcpFastAtan2, AgreesWithStdAtan2) {
-  double worst = 0.0;
-  for (int k = 0; k < 20000; ++k) {
-    const double angle = -kPi + 2.0 * kPi * (k + 0.5) / 20000.0;
-    for (const double radius : {1e-3, 1.0, 80.0}) {
-      const double y = radius * std::sin(angle);
-      const double x = radius * std::cos(angle);
-      worst = std::max(worst, std::abs(fast_atan2(y, x) - std::atan2(y, x)));
-    }
-  }
-  EXPECT_LT(worst, 1e-7);
-  EXPECT_DOUBLE_EQ(fast_atan2(0.0, 1.0), 0.0);
-  EXPECT_NEAR(fast_atan2(1.0, 0.0), 0.5 * kPi, 1e-12);
-  EXPECT_NEAR(fast_atan2(0.0, -1.0), kPi, 1e-12);
-}
-
 // Real roots of a x^4 + ... from the eigenvalues of the companion matrix.
 std::vector<double> companion_real_roots(const double c[5]) {
   Eigen::Matrix4d companion = Eigen::Matrix4d::Zero();

@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numbers>
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
@@ -22,7 +21,6 @@ namespace {
 
 using namespace pl_icp_detail;
 
-constexpr double kPi = std::numbers::pi;
 
 // ---------------------------------------------------------------------------------------------
 // Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
@@ -531,21 +529,6 @@ int solve_quartic(double a, double b, double c, double d, double e, double roots
   const double coefficients[5] = {1.0, A, B, C, D};
   for (int k = 0; k < count; ++k) roots[k] = polish(coefficients, 4, y[k] - A / 4.0);
   return count;
-}
-
-double fast_atan2(double y, double x) {
-  const double ax = std::abs(x);
-  const double ay = std::abs(y);
-  if (ax == 0.0 && ay == 0.0) return 0.0;
-  const bool steep = ay > ax;
-  const double z = steep ? ax / ay : ay / ax;  // in [0, 1]
-  const double z2 = z * z;
-  // Abramowitz & Stegun 4.4.49: |error| <= 2e-8 on [0, 1].
-  double angle = z * (1.0 + z2 * (-0.3333314528 + z2 * (0.1999355085 + z2 * (-0.1420889944 + z2 * (0.1065626393 +
-                 z2 * (-0.0752896400 + z2 * (0.0429096138 + z2 * (-0.0161657367 + z2 * 0.0028662257))))))));
-  if (steep) angle = 0.5 * kPi - angle;
-  if (x < 0.0) angle = kPi - angle;
-  return y < 0.0 ? -angle : angle;
 }
 
 void PointToLineProblem::add(const Point2& p, const Point2& q, const Point2& n, double w) {

@@ -106,8 +106,4 @@ std::optional<SE2> minimize_point_to_line(const PointToLineProblem& problem);
 /// Newton polish; returns their count (0 to 4) in roots[0..count).
 int solve_quartic(double a, double b, double c, double d, double e, double roots[4]);
 
-/// atan2 to within 1e-7 rad (Abramowitz & Stegun 4.4.49). (The projective search itself compares
-/// pseudo-angles, which need no arctangent; see pl_icp.cpp.)
-double fast_atan2(double y, double x);
-
 }  // namespace slam2d
