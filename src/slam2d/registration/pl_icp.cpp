@@ -21,7 +21,6 @@ namespace {
 
 using namespace pl_icp_detail;
 
-
 // ---------------------------------------------------------------------------------------------
 // Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
 [[gnu::always_inline]] inline void add_term(PointToLineProblem& problem, const Point2& p, const Point2& q, const Point2& n,
@@ -297,9 +296,11 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     const double ox = rpx + tx - q1.x(), oy = rpy + ty - q1.y();            // offset = R p + t - q1
     const double e = nx * ox + ny * oy;
     const double w2 = 2.0 * weight(source, i);
-    const double a2 = ny * rpx - nx * rpy;  // n^T d(R p)/d theta
+    const double a2 = ny * rpx - nx * rpy;      // n^T d(R p)/d theta
+    const double n_rp = nx * rpx + ny * rpy;    // n^T R p
+    const double along_offset = ny * ox - nx * oy;  // along^T offset
     hessian.add(Eigen::Vector3d(nx, ny, a2), w2);
-    curvature -= w2 * e * (nx * rpx + ny * rpy);
+    curvature -= w2 * e * n_rp;
     // d2J/dz dx = w2 (de/dz a + e (dn/dz, dn/dz^T d(R p)/d theta)), a = (nx, ny, a2).
     const auto column = [&](double de, double dnx, double dny) -> Eigen::Vector3d {
       return Eigen::Vector3d(w2 * (de * nx + e * dnx), w2 * (de * ny + e * dny),
@@ -308,15 +309,14 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
     // The source range moves p along its bearing u: de = n^T R u, and n^T J R u for the angle.
     const double range = p.norm();
     const double inverse_range = range > 1e-12 ? 1.0 / range : 0.0;
-    const double de = (nx * rpx + ny * rpy) * inverse_range;
-    const double dn_theta = (ny * rpx - nx * rpy) * inverse_range;
+    const double de = n_rp * inverse_range;
+    const double dn_theta = a2 * inverse_range;
     spread_sum.add(Eigen::Vector3d(w2 * de * nx, w2 * de * ny, w2 * (de * a2 + e * dn_theta)));
     // The target ranges move q1 and q2 along their bearings u1, u2: dn = -+(n^T dq / |d|) along.
     const double beta1 = (nx * directions[s.j1].x() + ny * directions[s.j1].y()) * inverse_length;
-    const double along_offset = (ny * ox - nx * oy) * inverse_length;
-    target_columns[s.j1] += column(beta1 * length * (along_offset - 1.0), beta1 * ny, -beta1 * nx);
+    target_columns[s.j1] += column(beta1 * length * (along_offset * inverse_length - 1.0), beta1 * ny, -beta1 * nx);
     const double beta2 = (nx * directions[s.j2].x() + ny * directions[s.j2].y()) * inverse_length;
-    target_columns[s.j2] += column(-beta2 * (ny * ox - nx * oy), -beta2 * ny, beta2 * nx);
+    target_columns[s.j2] += column(-beta2 * along_offset, -beta2 * ny, beta2 * nx);
   }
   Eigen::Matrix3d H = hessian.matrix();
   H(2, 2) += curvature;
