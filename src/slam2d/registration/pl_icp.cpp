@@ -21,6 +21,8 @@ namespace {
 
 using namespace pl_icp_detail;
 
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
 // ---------------------------------------------------------------------------------------------
 // Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
 [[gnu::always_inline]] inline void add_term(PointToLineProblem& problem, const Point2& p, const Point2& q, const Point2& n,
@@ -43,7 +45,6 @@ struct SourcePair {
   TrackedNearest nearest;          // j1 across iterations, with its certificate
 
   bool paired() const { return j2 != kNone; }  // j2 is kNone whenever j1 is
-  void drop() { j2 = kNone; }
 };
 
 // Sums of x, y, x^2, x y, y^2 over a run of points; as prefix sums over the target, the scatter of
@@ -62,6 +63,8 @@ struct PointMoments {
 struct Workspace {
   std::vector<SourcePair> pairs;   // one per source point
   std::vector<double> distances;   // Eq. (3)'s order statistics (BucketSelector), one slot per source point
+  std::vector<int> inliers;        // the source points of the pairs kept, in order (inlier_count of them)
+  std::size_t inlier_count = 0;
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
   std::vector<Eigen::Vector3d> target_columns;  // per target point, for the covariance
   std::vector<PointMoments> target_moments;     // prefix sums over the target, for the fitted normals
@@ -74,6 +77,8 @@ struct Workspace {
   void reset(std::size_t sources, std::size_t targets) {
     pairs.assign(sources, SourcePair{});
     distances.resize(sources);
+    inliers.resize(sources);
+    inlier_count = 0;
     closest.resize(targets);
     target_columns.resize(targets);
     target_moments.resize(targets + 1);
@@ -121,7 +126,7 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
   double* const closest = ws.closest.data();
   SourcePair* const pairs = ws.pairs.data();
   const int target_count = t.size();
-  if (doubles) std::fill(closest, closest + target_count, std::numeric_limits<double>::infinity());
+  if (doubles) std::fill(closest, closest + target_count, kInfinity);
   int previous = kNone;  // the last j1 found: where a fresh walk starts (the source is a scan too)
   const std::size_t count = ws.pairs.size();
   for (std::size_t i = 0; i < count; ++i) {
@@ -133,13 +138,11 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
     s.j2 = kNone;
     if (j1 == kNone) continue;
     previous = j1;
-    // j2: the closer of j1's scan neighbours.
-    int j2 = j1 + 1;
-    if (j1 == 0) {
-      if (j2 >= target_count) continue;
-    } else if (j2 >= target_count || (targets[j1 - 1] - moved).squaredNorm() <= (targets[j2] - moved).squaredNorm()) {
-      j2 = j1 - 1;
-    }
+    if (target_count < 2) continue;  // a one-point target has no segment
+    // j2: the closer of j1's scan neighbours (ties: the one below), chosen without a branch.
+    const double below = j1 > 0 ? (targets[std::max(j1 - 1, 0)] - moved).squaredNorm() : kInfinity;
+    const double above = j1 + 1 < target_count ? (targets[std::min(j1 + 1, target_count - 1)] - moved).squaredNorm() : kInfinity;
+    const int j2 = j1 + 1 - 2 * static_cast<int>(below <= above);
     const int segment = std::min(j1, j2);
     if (kReject && segment_lengths[segment] > max_length) continue;  // dropped: too long
     const Point2 normal = segment_normals[segment];
@@ -151,20 +154,26 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
   }
 }
 
+// j2, or kNone (-1, all bits set) unless keep: without a branch, which compilers tend to make
+// of a conditional store, and which the data-dependent rejections mispredict.
+inline int unpair_unless(bool keep, int j2) {
+  static_assert(kNone == -1);
+  return j2 | (static_cast<int>(keep) - 1);
+}
+
 // Of the source points sharing a j1, drops all but the closest; collects the distances of the
 // rest into ws.distances and returns their count (the long segments went in
 // find_correspondences<true>).
 std::size_t drop_doubles(const PlIcpConfig& config, Workspace& ws) {
   double* const out = ws.distances.data();
   const double* const closest = ws.closest.data();
+  const bool doubles = config.outliers_remove_doubles;
   std::size_t kept = 0;
-  for (SourcePair& s : ws.pairs) {
-    if (!s.paired()) continue;
-    if (config.outliers_remove_doubles && s.distance > closest[s.j1]) {
-      s.drop();
-    } else {
-      out[kept++] = s.distance;
-    }
+  for (SourcePair& s : ws.pairs) {  // without a branch: which pairs go is data-dependent
+    const bool keep = s.paired() & !(doubles & (s.distance > closest[std::max(s.j1, 0)]));
+    s.j2 = unpair_unless(keep, s.j2);
+    out[kept] = s.distance;
+    kept += keep;
   }
   return kept;
 }
@@ -191,21 +200,27 @@ struct Association {
   std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a
 };
 
-// Eq. (3) and the other rejections: long segments, doubles, trimming.
+// Eq. (3) and the other rejections: long segments, doubles, trimming. Lists the kept pairs'
+// source points in ws.inliers.
 Association reject_outliers(const PlIcpConfig& config, Workspace& ws) {
+  ws.inlier_count = 0;
   const std::size_t kept = drop_doubles(config, ws);
   Association association;
   if (kept == 0) return association;
   const double limit = trimming_limit(config, kept, ws);
-  for (SourcePair& s : ws.pairs) {
-    if (s.paired() && s.distance > limit) s.drop();
-    std::uint64_t pair = ~std::uint64_t{0};
-    if (s.paired()) {
-      ++association.kept;
-      pair = (static_cast<std::uint64_t>(s.j1) << 32) ^ static_cast<std::uint32_t>(s.j2);
-    }
-    association.hash = (association.hash ^ pair) * 1099511628211ULL;
+  int* const inliers = ws.inliers.data();
+  const int count = static_cast<int>(ws.pairs.size());
+  for (int i = 0; i < count; ++i) {  // without a branch, as in drop_doubles
+    SourcePair& s = ws.pairs[i];
+    const bool keep = s.paired() & !(s.distance > limit);
+    s.j2 = unpair_unless(keep, s.j2);
+    const std::uint64_t pair = (static_cast<std::uint64_t>(s.j1) << 32) ^ static_cast<std::uint32_t>(s.j2);
+    const std::uint64_t dropped = static_cast<std::uint64_t>(keep) - 1;  // all bits set, or none when kept
+    association.hash = (association.hash ^ (pair | dropped)) * 1099511628211ULL;
+    inliers[association.kept] = i;
+    association.kept += keep;
   }
+  ws.inlier_count = association.kept;
   return association;
 }
 
@@ -217,11 +232,9 @@ template <bool kWeighted>
 PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source, const Workspace& ws) {
   double m00 = 0, m01 = 0, m02 = 0, m03 = 0, m11 = 0, m12 = 0, m13 = 0, m22 = 0, m23 = 0, m33 = 0;
   double g0 = 0, g1 = 0, g2 = 0, g3 = 0, c = 0;
-  std::size_t terms = 0;
-  const std::size_t count = ws.pairs.size();
-  for (std::size_t i = 0; i < count; ++i) {
+  for (std::size_t k = 0; k < ws.inlier_count; ++k) {
+    const int i = ws.inliers[k];
     const SourcePair& s = ws.pairs[i];
-    if (!s.paired()) continue;
     const double nx = s.normal.x(), ny = s.normal.y(), px = s.moved.x(), py = s.moved.y();
     // a = (n_x, n_y, n^T p, n^T J p), b = n^T q (add_term).
     const double a2 = nx * px + ny * py, a3 = ny * px - nx * py;
@@ -237,13 +250,12 @@ PointToLineProblem build_problem(const TargetIndex& t, const PointCloud2& source
     m22 += w2 * a2, m23 += w2 * a3, m33 += w3 * a3;
     g0 += w0 * b, g1 += w1 * b, g2 += w2 * b, g3 += w3 * b;
     c += wb * b;
-    ++terms;
   }
   PointToLineProblem problem;
   problem.M << m00, m01, m02, m03, m01, m11, m12, m13, m02, m12, m22, m23, m03, m13, m23, m33;
   problem.g << -2.0 * g0, -2.0 * g1, -2.0 * g2, -2.0 * g3;
   problem.c = c;
-  problem.terms = terms;
+  problem.terms = ws.inlier_count;
   return problem;
 }
 
@@ -275,21 +287,20 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
   const Point2* const targets = t.points.data();
   const Point2* const directions = t.directions.data();
   const double* const segment_lengths = t.segment_lengths.data();
-  const std::size_t count = ws.pairs.size();
-  std::size_t pairs = 0;
+  const int* const inliers = ws.inliers.data();
+  const std::size_t pairs = ws.inlier_count;
   const double tx = T.x(), ty = T.y(), c = R(0, 0), sn = R(1, 0);
-  for (std::size_t i = 0; i < count; ++i) {
+  for (std::size_t k = 0; k < pairs; ++k) {
+    const int i = inliers[k];
     const SourcePair& s = source_pairs[i];
-    if (!s.paired()) continue;
-    ++pairs;
     // The segment (q1, q2) from the target's tables: n = J d / |d| is its stored normal, turned
     // when q2 comes before q1 in the scan.
     const int segment = std::min(s.j1, s.j2);
     const double length = segment_lengths[segment];
     if (!(length > 1e-12)) continue;
     const double inverse_length = 1.0 / length;
-    const double nx = s.j2 > s.j1 ? s.normal.x() : -s.normal.x();
-    const double ny = s.j2 > s.j1 ? s.normal.y() : -s.normal.y();  // along = d / |d| = (ny, -nx)
+    const double turn = s.j2 > s.j1 ? 1.0 : -1.0;
+    const double nx = turn * s.normal.x(), ny = turn * s.normal.y();  // along = d / |d| = (ny, -nx)
     const Point2& q1 = targets[s.j1];
     const Point2& p = sources[i];
     const double rpx = c * p.x() - sn * p.y(), rpy = sn * p.x() + c * p.y();  // R p; d(R p)/d theta = (-rpy, rpx)
@@ -372,9 +383,9 @@ DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, co
   std::vector<PointMoments>& moments = ws.target_moments;
   moments[0] = {};
   for (int k = 0; k < t.size(); ++k) moments[k + 1] = moments[k].plus(t.points[k]);
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+  for (std::size_t k = 0; k < ws.inlier_count; ++k) {
+    const int i = ws.inliers[k];
     const SourcePair& s = ws.pairs[i];
-    if (!s.paired()) continue;
     const Point2 n = fitted_normal(t, moments, s.j1, config.max_segment_length);
     if (!(n.squaredNorm() > 0.5)) continue;  // no fitted normal (has_normal)
     const Point2 Rp = R * source.points[i];
@@ -396,9 +407,9 @@ DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, co
 // The weighted RMS point-to-line distance of the pairs.
 double rms_point_to_line(const PointCloud2& source, const Workspace& ws) {
   double sum = 0.0, weights = 0.0;
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+  for (std::size_t k = 0; k < ws.inlier_count; ++k) {
+    const int i = ws.inliers[k];
     const SourcePair& s = ws.pairs[i];
-    if (!s.paired()) continue;
     const double w = weight(source, i);
     sum += w * s.distance * s.distance;
     weights += w;
@@ -410,9 +421,9 @@ double rms_point_to_line(const PointCloud2& source, const Workspace& ws) {
 // again, keeping the association.
 void move_pairs(const TargetIndex& t, const PointCloud2& source, const SE2& T, Workspace& ws) {
   const Eigen::Matrix2d R = T.rotation();
-  for (std::size_t i = 0; i < ws.pairs.size(); ++i) {
+  for (std::size_t k = 0; k < ws.inlier_count; ++k) {
+    const int i = ws.inliers[k];
     SourcePair& s = ws.pairs[i];
-    if (!s.paired()) continue;
     s.moved = R * source.points[i] + T.translation();
     s.distance = std::abs(s.normal.dot(s.moved - t.points[s.j1]));
   }
@@ -424,8 +435,7 @@ void move_pairs(const TargetIndex& t, const PointCloud2& source, const SE2& T, W
 MatchResult finish(const PointCloud2& source, const TargetIndex& t, const SE2& T, bool converged,
                    bool associated_at_T, int iterations, const PlIcpConfig& config, Workspace& ws) {
   if (!associated_at_T) move_pairs(t, source, T, ws);
-  const auto inliers = static_cast<std::size_t>(
-      std::count_if(ws.pairs.begin(), ws.pairs.end(), [](const SourcePair& s) { return s.paired(); }));
+  const std::size_t inliers = ws.inlier_count;
   MatchResult result;
   result.T_target_source = T;
   result.iterations = iterations;

@@ -200,14 +200,15 @@ bool window_closest(const TargetIndex& t, const Query& q, int center, double max
   const double down = beyond_bound<-1>(t, q, lo);
   if (!(up >= 0.0 && down >= 0.0)) return false;  // a window edge short of p's bearing
   const double outside = std::min(up, down);
+  // Branch-free (the comparisons are data-dependent): the second smallest takes the larger of
+  // the best so far and d2, minsd / maxsd / cmov.
   double best = kInfinity, second = kInfinity;
   int best_index = kNone;
   for (int k = lo; k <= hi; ++k) {
     const double d2 = (t.points[k] - q.p).squaredNorm();
-    const bool closer = d2 < best;
-    second = std::min(second, closer ? best : d2);
-    best_index = closer ? k : best_index;
-    best = closer ? d2 : best;
+    best_index = d2 < best ? k : best_index;
+    second = std::min(second, std::max(best, d2));
+    best = std::min(best, d2);
   }
   if (outside < std::min(best, max_squared)) return false;  // a point outside may be closer
   second = std::min(second, outside);
