@@ -255,6 +255,23 @@ TEST(PlIcpSearch, TrackedSearchEqualsBruteForceAlongTheIterations) {
   EXPECT_GT(certified, queries / 2);
 }
 
+// The jump tables are built for long walks only: a query at its scan point settles within a few
+// steps, one far from every point (max_distance 100 m, near the sensor) walks a long way, and
+// both answers are the brute-force ones.
+TEST(PlIcpSearch, JumpTablesAreBuiltForLongWalksOnly) {
+  using namespace pl_icp_detail;
+  const ScanPair pair = make_scan_pair(testing::office_world(), {.beams = 720});
+  const TargetIndex t = prepare_target(pair.target, PlIcpSearch::kProjective);
+  ASSERT_TRUE(t.ordered);
+  TrackedNearest near;
+  EXPECT_EQ(track_nearest(t, t.points[300], 100.0, near), brute_force_within(t, t.points[300], 100.0));
+  EXPECT_FALSE(t.jump_tables_built);
+  const Point2 far(0.05, -0.02);
+  TrackedNearest lonely;
+  EXPECT_EQ(track_nearest(t, far, 100.0, lonely), brute_force_within(t, far, 100.0));
+  EXPECT_TRUE(t.jump_tables_built);
+}
+
 ScanPair office_pair(const SE2& T_target_source, std::uint64_t seed = 1) {
   return make_scan_pair(testing::office_world(), {.T_target_source = T_target_source, .seed = seed});
 }

@@ -37,7 +37,9 @@ inline double wrap_half_turn(double difference) {
 
 // up_bigger[i]: the first j > i with a larger range (n if none), and so on. Amortised O(n):
 // a run of points that are not larger than i is skipped with their own table entries.
-void build_jump_tables(TargetIndex& t) {
+void build_jump_tables(const TargetIndex& t) {
+  if (t.jump_tables_built) return;
+  t.jump_tables_built = true;
   const int n = t.size();
   const auto& r = t.ranges;
   t.up_bigger.assign(n, n);
@@ -138,9 +140,9 @@ struct Walk {
   }
 };
 
-// One step of the walk on one side (kDirection +1 up, -1 down) from point j; false when the
-// side is done. Inlined: it is the innermost loop of the matcher.
-template <int kDirection>
+// One step of the walk on one side (kDirection +1 up, -1 down) from point j, with or without
+// the jump tables; false when the side is done. Inlined: it is the innermost loop of the matcher.
+template <int kDirection, bool kJumps>
 [[gnu::always_inline]] inline bool walk_step(const TargetIndex& t, const Query& q, int& j, Walk& walk) {
   const int n = t.size();
   if (kDirection > 0 ? j >= n : j < 0) return false;
@@ -158,7 +160,7 @@ template <int kDirection>
     return true;
   }
   if (walk.stop(std::min(tail, ray_distance_squared(q.p, q.rho2, t.directions[j])))) return false;
-  if (walk.index == j) {  // no jump from the best: the clearance needs the points it would skip
+  if (!kJumps || walk.index == j) {  // no jump from the best: the clearance needs the points it would skip
     j += kDirection;
     return true;
   }
@@ -221,6 +223,26 @@ bool window_closest(const TargetIndex& t, const Query& q, int center, double max
   return true;
 }
 
+// Both sides of the walk, in turns while both are open: at most `rounds` turns; true when both
+// sides are done.
+struct WalkSides {
+  int up = 0, down = 0;  // the next point on either side
+  bool up_open = true, down_open = true;
+};
+
+template <bool kJumps>
+bool walk_sides(const TargetIndex& t, const Query& q, WalkSides& s, Walk& walk, int rounds) {
+  for (; rounds > 0 && (s.up_open || s.down_open); --rounds) {
+    if (s.up_open) s.up_open = walk_step<+1, kJumps>(t, q, s.up, walk);
+    if (s.down_open) s.down_open = walk_step<-1, kJumps>(t, q, s.down, walk);
+  }
+  return !(s.up_open || s.down_open);
+}
+
+// Walks are mostly a few steps (the window settles most queries, and a walk starts near p's
+// bearing), so the jump tables, O(n) per target, are built only for a walk longer than this.
+constexpr int kStepsBeforeJumps = 16;
+
 // The closest target point strictly within sqrt(max_squared) of p, starting at `hint` (the
 // previous iteration's match) or else at p's bearing; `clearance` (m) as in the header.
 int projective_closest(const TargetIndex& t, const Point2& p, int hint, double max_squared, double& clearance) {
@@ -236,16 +258,11 @@ int projective_closest(const TargetIndex& t, const Point2& p, int hint, double m
     start = static_cast<int>(std::lower_bound(t.bearings.begin(), t.bearings.end(), q.theta) - t.bearings.begin());
   }
   Walk walk{max_squared};
-  int up = start;
-  int down = start - 1;
-  bool up_open = true;
-  bool down_open = true;
-  while (up_open && down_open) {
-    up_open = walk_step<+1>(t, q, up, walk);
-    down_open = walk_step<-1>(t, q, down, walk);
+  WalkSides sides{.up = start, .down = start - 1};
+  if (!walk_sides<false>(t, q, sides, walk, kStepsBeforeJumps)) {
+    build_jump_tables(t);
+    walk_sides<true>(t, q, sides, walk, std::numeric_limits<int>::max());
   }
-  while (up_open) up_open = walk_step<+1>(t, q, up, walk);
-  while (down_open) down_open = walk_step<-1>(t, q, down, walk);
   clearance = std::sqrt(walk.others);
   return walk.index;
 }
@@ -270,6 +287,7 @@ void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& 
   t.directions.clear();
   t.ranges.clear();
   t.ordered = false;
+  t.jump_tables_built = false;
   t.gap_center = 0.0;
   t.tree.reset();
   t.original.reserve(target.size());
@@ -294,9 +312,7 @@ void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& 
     t.segment_normals[k] = length > 0.0 ? Point2(Point2(-along.y(), along.x()) * (1.0 / length)) : Point2::Zero();
   }
   unwrap_bearings(t);
-  if (search == PlIcpSearch::kProjective && t.ordered) {
-    build_jump_tables(t);
-  } else {
+  if (!(search == PlIcpSearch::kProjective && t.ordered)) {
     t.ordered = false;
     t.tree = std::make_unique<KdTree2>(t.points);
   }

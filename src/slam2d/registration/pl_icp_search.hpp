@@ -30,7 +30,8 @@ constexpr int kNone = -1;
 constexpr double kMinRange = 1e-3;  // m: target points this close to the sensor have no bearing
 
 /// The target, prepared once per match: its usable points in scan order with their ranges, unit
-/// bearing vectors, unwrapped bearings and the jump tables of the projective search.
+/// bearing vectors and unwrapped bearings; the jump tables of the projective search are built on
+/// the first walk that needs them (most walks end within a few steps).
 struct TargetIndex {
   std::vector<std::size_t> original;    // cloud index of each usable point
   std::vector<Point2> points;           // m
@@ -39,7 +40,8 @@ struct TargetIndex {
   std::vector<double> bearings;         // pseudo-angles, unwrapped, strictly increasing when `ordered`
   std::vector<Point2> segment_normals;  // unit normal of the segment (k, k + 1)
   std::vector<double> segment_lengths;  // m, |p_{k+1} - p_k|
-  std::vector<int> up_bigger, up_smaller, down_bigger, down_smaller;
+  mutable std::vector<int> up_bigger, up_smaller, down_bigger, down_smaller;  // when jump_tables_built
+  mutable bool jump_tables_built = false;
   bool ordered = false;                 // bearings increase over less than a full turn
   double gap_center = 0.0;              // pseudo-angle, the middle of the unscanned sector
   std::unique_ptr<KdTree2> tree;        // kd-tree search (config, or an unordered target)
