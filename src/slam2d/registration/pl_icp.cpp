@@ -140,8 +140,8 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
     previous = j1;
     if (target_count < 2) continue;  // a one-point target has no segment
     // j2: the closer of j1's scan neighbours (ties: the one below), chosen without a branch.
-    const double below = j1 > 0 ? (targets[std::max(j1 - 1, 0)] - moved).squaredNorm() : kInfinity;
-    const double above = j1 + 1 < target_count ? (targets[std::min(j1 + 1, target_count - 1)] - moved).squaredNorm() : kInfinity;
+    const double below = j1 > 0 ? (targets[j1 - 1] - moved).squaredNorm() : kInfinity;
+    const double above = j1 + 1 < target_count ? (targets[j1 + 1] - moved).squaredNorm() : kInfinity;
     const int j2 = j1 + 1 - 2 * static_cast<int>(below <= above);
     const int segment = std::min(j1, j2);
     if (kReject && segment_lengths[segment] > max_length) continue;  // dropped: too long

@@ -160,7 +160,9 @@ template <int kDirection, bool kJumps>
     return true;
   }
   if (walk.stop(std::min(tail, ray_distance_squared(q.p, q.rho2, t.directions[j])))) return false;
-  if (!kJumps || walk.index == j) {  // no jump from the best: the clearance needs the points it would skip
+  // Plain steps without the tables, and none but steps from the best: the clearance needs the
+  // points a jump would skip.
+  if (!kJumps || walk.index == j) {
     j += kDirection;
     return true;
   }
