@@ -68,6 +68,7 @@ struct Workspace {
   std::vector<double> closest;     // m, per target point: its closest source point (doubles)
   std::vector<Eigen::Vector3d> target_columns;  // per target point, for the covariance
   std::vector<PointMoments> target_moments;     // prefix sums over the target, for the fitted normals
+  std::vector<int> run_first, run_last;         // per target point: the ends of its run (no longer gap), for the same
   std::vector<std::uint8_t> distance_buckets;   // BucketSelector's buffers
   std::vector<double> selection_scratch;
 
@@ -82,6 +83,8 @@ struct Workspace {
     closest.resize(targets);
     target_columns.resize(targets);
     target_moments.resize(targets + 1);
+    run_first.resize(targets);
+    run_last.resize(targets);
   }
 };
 
@@ -351,14 +354,24 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
 // corridor from a room. Closed form: the eigenvector of the scatter's smaller eigenvalue, the
 // scatter from the prefix sums `moments` of the target points (moments[k] sums points [0, k); in
 // absolute coordinates: with ranges of tens of metres the scatter keeps about 1e-11 m^2, the
-// normal's direction 1e-9 rad).
+// normal's direction 1e-9 rad). ws holds the prefix sums and the runs (prepare_fitted_normals).
 constexpr int kNormalHalfWindow = 3;
 
-Point2 fitted_normal(const TargetIndex& t, const std::vector<PointMoments>& moments, int k, double max_gap) {
-  int lo = k, hi = k;
-  while (lo > 0 && k - lo < kNormalHalfWindow && t.segment_lengths[lo - 1] <= max_gap) --lo;
-  while (hi + 1 < t.size() && hi - k < kNormalHalfWindow && t.segment_lengths[hi] <= max_gap) ++hi;
+void prepare_fitted_normals(const TargetIndex& t, double max_gap, Workspace& ws) {
+  const int n = t.size();
+  ws.target_moments[0] = {};
+  for (int k = 0; k < n; ++k) ws.target_moments[k + 1] = ws.target_moments[k].plus(t.points[k]);
+  ws.run_first[0] = 0;
+  for (int k = 1; k < n; ++k) ws.run_first[k] = t.segment_lengths[k - 1] <= max_gap ? ws.run_first[k - 1] : k;
+  ws.run_last[n - 1] = n - 1;
+  for (int k = n - 2; k >= 0; --k) ws.run_last[k] = t.segment_lengths[k] <= max_gap ? ws.run_last[k + 1] : k;
+}
+
+Point2 fitted_normal(const Workspace& ws, int k) {
+  const int lo = std::max(k - kNormalHalfWindow, ws.run_first[k]);
+  const int hi = std::min(k + kNormalHalfWindow, ws.run_last[k]);
   if (hi - lo < 2) return Point2::Zero();
+  const std::vector<PointMoments>& moments = ws.target_moments;
   const PointMoments sum = moments[hi + 1].minus(moments[lo]);
   const double inverse_count = 1.0 / static_cast<double>(hi - lo + 1);
   const double sxx = sum.xx - sum.x * sum.x * inverse_count;
@@ -380,13 +393,11 @@ DegeneracyAnalysis pl_icp_degeneracy(const PointCloud2& source, const SE2& T, co
   SymmetricSum3 information_sum;
   double squared_radius_sum = 0.0;
   std::size_t used = 0;
-  std::vector<PointMoments>& moments = ws.target_moments;
-  moments[0] = {};
-  for (int k = 0; k < t.size(); ++k) moments[k + 1] = moments[k].plus(t.points[k]);
+  prepare_fitted_normals(t, config.max_segment_length, ws);
   for (std::size_t k = 0; k < ws.inlier_count; ++k) {
     const int i = ws.inliers[k];
     const SourcePair& s = ws.pairs[i];
-    const Point2 n = fitted_normal(t, moments, s.j1, config.max_segment_length);
+    const Point2 n = fitted_normal(ws, s.j1);
     if (!(n.squaredNorm() > 0.5)) continue;  // no fitted normal (has_normal)
     const Point2 Rp = R * source.points[i];
     const Eigen::Vector3d a(n.x(), n.y(), n.dot(Point2(-Rp.y(), Rp.x())));
