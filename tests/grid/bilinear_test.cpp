@@ -128,5 +128,28 @@ TEST(Bilinear, OccupancyFastPathEqualsGenericPath) {
   EXPECT_EQ(interpolate_occupancy(grid, Eigen::Vector2d(1e300, 0.0)).value, 0.5);
 }
 
+TEST(Bilinear, InterpolatorGivesInterpolateOccupancyBitForBit) {
+  OccupancyGrid grid(OccupancyGridConfig{.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.44});
+  LaserScan scan;
+  scan.angle_min = -std::numbers::pi / 2;
+  scan.angle_increment = std::numbers::pi / 180;
+  scan.range_max = 30.0;
+  for (int i = 0; i < 180; ++i) scan.ranges.push_back(2.0 + 0.5 * std::sin(0.1 * i));
+  for (int k = 0; k < 12; ++k) grid.integrate_scan(scan, SE2(0.3 + 0.05 * k, -0.2, 0.4 + 0.02 * k));  // clamped cells too
+  OccupancyInterpolator interpolate(grid);
+  Rng rng(12);
+  for (int i = 0; i < 20000; ++i) {
+    // Around the scanned area (tile borders at multiples of 3.2 m), and now and then far beyond the index range.
+    const Eigen::Vector2d p = i % 1000 == 0 ? Eigen::Vector2d(rng.uniform(-1e9, 1e9), rng.uniform(-1e9, 1e9))
+                                            : Eigen::Vector2d(rng.uniform(-3.4, 3.4), rng.uniform(-3.4, 3.4));
+    const BilinearSample expected = interpolate_occupancy(grid, p);
+    const BilinearSample got = interpolate(p);
+    ASSERT_EQ(got.value, expected.value) << i;
+    ASSERT_EQ(got.gradient.x(), expected.gradient.x()) << i;
+    ASSERT_EQ(got.gradient.y(), expected.gradient.y()) << i;
+  }
+  EXPECT_EQ(interpolate(Eigen::Vector2d(NAN, 0.0)).value, 0.5);
+}
+
 }  // namespace
 }  // namespace slam2d

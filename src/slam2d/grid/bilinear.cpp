@@ -6,13 +6,21 @@ namespace slam2d {
 
 namespace {
 
-// P(occupied) in single precision (expf is several times faster than exp; the cells hold float
-// log-odds anyway): within 1e-7 of probability_from_log_odds.
 double cell_probability(const OccupancyCell& cell) {
-  return cell.last_scan == 0 ? 0.5 : static_cast<double>(1.0f / (1.0f + std::exp(-cell.log_odds)));
+  return cell.last_scan == 0 ? 0.5 : occupancy_probability(cell.log_odds);
 }
 
 }  // namespace
+
+// P(occupied) in single precision (expf is several times faster than exp; the cells hold float
+// log-odds anyway): within 1e-7 of probability_from_log_odds.
+double occupancy_probability(float log_odds) { return static_cast<double>(1.0f / (1.0f + std::exp(-log_odds))); }
+
+OccupancyInterpolator::OccupancyInterpolator(const OccupancyGrid& grid)
+    : cells_(grid.cells()), geometry_(grid.geometry()) {
+  thread_local Memo memo(occupancy_probability);
+  memo_ = &memo;
+}
 
 BilinearCorner bilinear_corner(const GridGeometry& geometry, const Eigen::Vector2d& point) {
   // Continuous index of the point with the samples (cell centres) at integer positions.

@@ -14,6 +14,10 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <bit>
+#include <climits>
+#include <cstdint>
+#include <cmath>
 
 #include "slam2d/grid/grid_geometry.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
@@ -70,5 +74,109 @@ std::array<double, 4> occupancy_corners(const OccupancyGrid& grid, CellIndex i, 
 /// Eq. (4)-(6) over the occupancy probability of a grid (0.5 in unknown cells): Hector's map
 /// value M. A point that is not finite or lies beyond the index range reads 0.5, gradient 0.
 BilinearSample interpolate_occupancy(const OccupancyGrid& grid, const Eigen::Vector2d& point);
+
+/// P(occupied) = 1 / (1 + exp(-l)) of a cell's log-odds in single precision, as
+/// interpolate_occupancy reads it.
+double occupancy_probability(float log_odds);
+
+/// A memo of a function of a float, f(l), exact: each slot holds a key and f(key), computed by f
+/// itself, so a hit returns bit for bit what f would return (a cache, not an approximation).
+/// Direct-mapped on the float's bits. One per thread (not safe to share between threads).
+template <int kLog2Slots>
+class FloatMemo {
+ public:
+  template <typename F>
+  explicit FloatMemo(F&& f) {
+    keys_.fill(0u);  // +0.0f
+    values_.fill(f(0.0f));
+  }
+  template <typename F>
+  double operator()(float l, F&& f) {
+    const auto bits = std::bit_cast<std::uint32_t>(l);
+    const std::uint32_t slot = (bits * 0x9E3779B1u) >> (32 - kLog2Slots);
+    if (keys_[slot] == bits) return values_[slot];
+    const double value = f(l);
+    keys_[slot] = bits;
+    values_[slot] = value;
+    return value;
+  }
+
+ private:
+  std::array<std::uint32_t, (1 << kLog2Slots)> keys_;
+  std::array<double, (1 << kLog2Slots)> values_;
+};
+
+/// interpolate_occupancy for many points of one grid that does not change meanwhile, with the
+/// same results bit for bit, faster: inlined, the point's scaled coordinates computed once, the
+/// last tile looked up remembered, and occupancy_probability read from an exact memo (the cells
+/// hold few distinct log-odds values: the clamp bounds and sums of the hit and miss steps).
+class OccupancyInterpolator {
+ public:
+  explicit OccupancyInterpolator(const OccupancyGrid& grid);
+  inline BilinearSample operator()(const Eigen::Vector2d& point);
+
+ private:
+  using CellGrid = TiledGrid<OccupancyCell>;
+  using Memo = FloatMemo<9>;
+  // cell_probability of interpolate_occupancy: 0.5 for an unknown cell (last_scan 0), else
+  // occupancy_probability(log_odds). An unknown cell was never written by OccupancyGrid, so it
+  // holds the default log-odds +0 (every write stamps last_scan >= 1), and
+  // occupancy_probability(+0) = 1 / (1 + 1) = 0.5 exactly: the memo alone gives both cases.
+  double probability(const OccupancyCell& cell) { return (*memo_)(cell.log_odds, occupancy_probability); }
+  const CellGrid::Tile* tile(CellIndex index) {
+    if (index != tile_index_) {
+      tile_ = cells_.find_tile(index);
+      tile_index_ = index;
+    }
+    return tile_;
+  }
+
+  const CellGrid& cells_;
+  GridGeometry geometry_;
+  Memo* memo_;  // this thread's
+  CellIndex tile_index_{INT_MIN, INT_MIN};  // no tile has this index (|tile index| < 2^23)
+  const CellGrid::Tile* tile_ = nullptr;
+};
+
+inline BilinearSample OccupancyInterpolator::operator()(const Eigen::Vector2d& point) {
+  // in_index_range(point, kMaxCellIndex - 2) and bilinear_corner's (point - origin) / resolution,
+  // the same division done once.
+  const double sx = (point.x() - geometry_.origin.x()) / geometry_.resolution;
+  const double sy = (point.y() - geometry_.origin.y()) / geometry_.resolution;
+  constexpr double kLimit = GridGeometry::kMaxCellIndex - 2.0;
+  if (!(std::abs(sx) <= kLimit && std::abs(sy) <= kLimit)) return {0.5, Eigen::Vector2d::Zero()};
+  const double u = sx - 0.5;
+  const double v = sy - 0.5;
+  const CellIndex i{GridGeometry::floor_to_int(u), GridGeometry::floor_to_int(v)};
+  const double fx = u - i.x;
+  const double fy = v - i.y;
+  // occupancy_corners.
+  constexpr int kMask = CellGrid::kTileSize - 1;
+  double m00 = 0.5;
+  double m10 = 0.5;
+  double m01 = 0.5;
+  double m11 = 0.5;
+  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
+    const CellGrid::Tile* t = tile(CellGrid::tile_of(i));
+    if (t != nullptr) {
+      const int offset = CellGrid::offset_in_tile(i);
+      m00 = probability(t->cells[offset]);
+      m10 = probability(t->cells[offset + 1]);
+      m01 = probability(t->cells[offset + CellGrid::kTileSize]);
+      m11 = probability(t->cells[offset + CellGrid::kTileSize + 1]);
+    }
+  } else {
+    m00 = probability(cells_.at(i));
+    m10 = probability(cells_.at({i.x + 1, i.y}));
+    m01 = probability(cells_.at({i.x, i.y + 1}));
+    m11 = probability(cells_.at({i.x + 1, i.y + 1}));
+  }
+  // bilinear_blend, Eq. (4)-(6), the same expressions.
+  BilinearSample sample;
+  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
+  sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / geometry_.resolution;
+  sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / geometry_.resolution;
+  return sample;
+}
 
 }  // namespace slam2d

@@ -204,14 +204,26 @@ void TiledGrid<Cell, kLog2TileSize>::update_ray(CellIndex from, CellIndex to, Vi
     Cell* cells = mutable_tile(tile_of(x_major ? CellIndex{major, minor} : CellIndex{minor, major}));
     const int k_last = k_first + (s_minor > 0 ? kMask - local_minor : local_minor);  // last k inside the tile
     const int count = std::min(s_major > 0 ? kTileSize - local_major : local_major + 1, d_major - i);
-    int base = x_major ? (local_minor << kLog2TileSize) | local_major : (local_major << kLog2TileSize) | local_minor;
+    const int base = x_major ? (local_minor << kLog2TileSize) | local_major : (local_major << kLog2TileSize) | local_minor;
+    // Cell j of the segment is cells[base + j major_offset + (k_j - k_first) minor_offset] with
+    // k_j = (position + j slope) >> 32, while k_j <= k_last. slope <= 2^32, so k steps by 0 or 1
+    // per cell: the index follows it, stepping along the minor axis when position crosses the
+    // next multiple of 2^32 (the same cells in the same order as computing k_j for each j).
+    std::ptrdiff_t cell = base;  // an index, not a pointer: after the last cell it may lie outside the tile
+    std::uint64_t next_minor = (static_cast<std::uint64_t>(k_first) + 1) << 32;  // where k becomes k_first + 1
+    int minor_steps_left = k_last - k_first;
     int j = 0;
-    for (; j < count; ++j) {
-      const int k = static_cast<int>(position >> 32);
-      if (k > k_last) break;
-      visit(cells[base + (k - k_first) * minor_offset]);
+    while (j < count) {
+      visit(cells[cell]);
+      ++j;
       position += slope;
-      base += major_offset;
+      cell += major_offset;
+      if (position >= next_minor) {
+        if (minor_steps_left == 0) break;  // the next cell lies in the next tile along the minor axis
+        --minor_steps_left;
+        next_minor += std::uint64_t{1} << 32;
+        cell += minor_offset;
+      }
     }
     i += j;
   }
