@@ -38,14 +38,16 @@ struct RbpfConfig {
   // Threads for the particles of an update (proposal, weight, map update): 0 = all hardware
   // threads (TBB's default concurrency), 1 = serial, at most 256. The result does not depend on it.
   int threads = 0;
-  // The particles' maps: Hector's pyramid (3 levels from 5 cm, p_hit 0.9, p_miss 0.44, no
-  // clearing by no-return beams); grid.max_range is replaced by max_range below. A miss lowers the
-  // log-odds by 0.24 (0.41 with p_miss 0.4), so the beams of a particle that has drifted erase the
-  // walls it mapped long ago more slowly, and the old map can still pull the particle back when it
-  // returns (docs/methods/rbpf.md, "Map update": ACES over 20 seeds).
+  // The particles' maps: Hector's pyramid (3 levels from 5 cm, p_hit 0.9, p_miss 0.42, clamped to
+  // [0.12, 0.999], no clearing by no-return beams); grid.max_range is replaced by max_range below.
+  // A hit raises the log-odds by 2.20, a miss lowers them by 0.32. The high upper clamp (log-odds
+  // 6.9, reached after 4 hits) lets a wall seen many times survive about 21 passes of a drifted
+  // particle's beams, so the old map can still pull the particle back when it returns, while a
+  // cell hit once (a moving object, an early mis-registration) is erased after 7 passes
+  // (docs/methods/rbpf.md, "Map update": ACES over 20 seeds, Intel over 8).
   MapPyramidConfig map{.levels = 3,
-                       .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.44,
-                                .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0}};
+                       .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.42,
+                                .probability_min = 0.12, .probability_max = 0.999, .max_clear_range = 0.0}};
   RbpfProposalConfig proposal{};
   RbpfMotionNoise motion{};
   double min_range = 0.1;          // m, shorter readings are dropped
