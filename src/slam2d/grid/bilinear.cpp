@@ -17,7 +17,7 @@ double cell_probability(const OccupancyCell& cell) {
 double occupancy_probability(float log_odds) { return static_cast<double>(1.0f / (1.0f + std::exp(-log_odds))); }
 
 OccupancyInterpolator::OccupancyInterpolator(const OccupancyGrid& grid)
-    : cells_(grid.cells()), geometry_(grid.geometry()) {
+    : corners_(grid), geometry_(grid.geometry()) {
   thread_local Memo memo(occupancy_probability);
   memo_ = &memo;
 }

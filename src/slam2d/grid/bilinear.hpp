@@ -51,24 +51,49 @@ BilinearSample interpolate_bilinear(const GridGeometry& geometry, ValueOf&& valu
                         value_of(CellIndex{i.x + 1, i.y + 1}), c.fraction, geometry.resolution);
 }
 
+/// The corners of occupancy_corners for many reads of one grid that does not change meanwhile,
+/// the last tile looked up remembered.
+class CornerReader {
+ public:
+  explicit CornerReader(const OccupancyGrid& grid) : cells_(grid.cells()) {}
+  /// The four corners m00, m10, m01, m11 of the cells i, i + x, i + y, i + x + y, each
+  /// probability(cell), 0.5 where no tile is allocated.
+  template <typename Probability>
+  std::array<double, 4> operator()(CellIndex i, Probability&& probability) {
+    constexpr int kMask = CellGrid::kTileSize - 1;
+    if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {  // all four in one tile
+      const CellGrid::Tile* t = tile(CellGrid::tile_of(i));
+      if (t == nullptr) return {0.5, 0.5, 0.5, 0.5};
+      const int offset = CellGrid::offset_in_tile(i);
+      return {probability(t->cells[offset]), probability(t->cells[offset + 1]),
+              probability(t->cells[offset + CellGrid::kTileSize]),
+              probability(t->cells[offset + CellGrid::kTileSize + 1])};
+    }
+    return {probability(cells_.at(i)), probability(cells_.at({i.x + 1, i.y})), probability(cells_.at({i.x, i.y + 1})),
+            probability(cells_.at({i.x + 1, i.y + 1}))};
+  }
+
+ private:
+  using CellGrid = TiledGrid<OccupancyCell>;
+  const CellGrid::Tile* tile(CellIndex index) {
+    if (index != tile_index_) {
+      tile_ = cells_.find_tile(index);
+      tile_index_ = index;
+    }
+    return tile_;
+  }
+
+  const CellGrid& cells_;
+  CellIndex tile_index_{INT_MIN, INT_MIN};  // no tile has this index (|tile index| < 2^23)
+  const CellGrid::Tile* tile_ = nullptr;
+};
+
 /// The corner values m00, m10, m01, m11 of the interpolation square with base cell i of an
 /// occupancy grid, each cell read as probability_of(const OccupancyCell&). The four cells are read
 /// from one tile when they share it (63 squares in 64 along each axis); a missing tile reads 0.5.
 template <typename ProbabilityOf>
 std::array<double, 4> occupancy_corners(const OccupancyGrid& grid, CellIndex i, ProbabilityOf&& probability_of) {
-  using CellGrid = TiledGrid<OccupancyCell>;
-  constexpr int kMask = CellGrid::kTileSize - 1;
-  const CellGrid& cells = grid.cells();
-  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
-    const CellGrid::Tile* tile = cells.find_tile(CellGrid::tile_of(i));
-    if (tile == nullptr) return {0.5, 0.5, 0.5, 0.5};
-    const int offset = CellGrid::offset_in_tile(i);
-    return {probability_of(tile->cells[offset]), probability_of(tile->cells[offset + 1]),
-            probability_of(tile->cells[offset + CellGrid::kTileSize]),
-            probability_of(tile->cells[offset + CellGrid::kTileSize + 1])};
-  }
-  return {probability_of(cells.at(i)), probability_of(cells.at({i.x + 1, i.y})), probability_of(cells.at({i.x, i.y + 1})),
-          probability_of(cells.at({i.x + 1, i.y + 1}))};
+  return CornerReader(grid)(i, probability_of);
 }
 
 /// Eq. (4)-(6) over the occupancy probability of a grid (0.5 in unknown cells): Hector's map
@@ -116,26 +141,16 @@ class OccupancyInterpolator {
   inline BilinearSample operator()(const Eigen::Vector2d& point);
 
  private:
-  using CellGrid = TiledGrid<OccupancyCell>;
   using Memo = FloatMemo<9>;
   // cell_probability of interpolate_occupancy: 0.5 for an unknown cell (last_scan 0), else
   // occupancy_probability(log_odds). An unknown cell was never written by OccupancyGrid, so it
   // holds the default log-odds +0 (every write stamps last_scan >= 1), and
   // occupancy_probability(+0) = 1 / (1 + 1) = 0.5 exactly: the memo alone gives both cases.
   double probability(const OccupancyCell& cell) { return (*memo_)(cell.log_odds, occupancy_probability); }
-  const CellGrid::Tile* tile(CellIndex index) {
-    if (index != tile_index_) {
-      tile_ = cells_.find_tile(index);
-      tile_index_ = index;
-    }
-    return tile_;
-  }
 
-  const CellGrid& cells_;
+  CornerReader corners_;
   GridGeometry geometry_;
   Memo* memo_;  // this thread's
-  CellIndex tile_index_{INT_MIN, INT_MIN};  // no tile has this index (|tile index| < 2^23)
-  const CellGrid::Tile* tile_ = nullptr;
 };
 
 inline BilinearSample OccupancyInterpolator::operator()(const Eigen::Vector2d& point) {
@@ -150,27 +165,7 @@ inline BilinearSample OccupancyInterpolator::operator()(const Eigen::Vector2d& p
   const CellIndex i{GridGeometry::floor_to_int(u), GridGeometry::floor_to_int(v)};
   const double fx = u - i.x;
   const double fy = v - i.y;
-  // occupancy_corners.
-  constexpr int kMask = CellGrid::kTileSize - 1;
-  double m00 = 0.5;
-  double m10 = 0.5;
-  double m01 = 0.5;
-  double m11 = 0.5;
-  if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
-    const CellGrid::Tile* t = tile(CellGrid::tile_of(i));
-    if (t != nullptr) {
-      const int offset = CellGrid::offset_in_tile(i);
-      m00 = probability(t->cells[offset]);
-      m10 = probability(t->cells[offset + 1]);
-      m01 = probability(t->cells[offset + CellGrid::kTileSize]);
-      m11 = probability(t->cells[offset + CellGrid::kTileSize + 1]);
-    }
-  } else {
-    m00 = probability(cells_.at(i));
-    m10 = probability(cells_.at({i.x + 1, i.y}));
-    m01 = probability(cells_.at({i.x, i.y + 1}));
-    m11 = probability(cells_.at({i.x + 1, i.y + 1}));
-  }
+  const auto [m00, m10, m01, m11] = corners_(i, [this](const OccupancyCell& cell) { return probability(cell); });
   // bilinear_blend, Eq. (4)-(6), the same expressions.
   BilinearSample sample;
   sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);

@@ -114,11 +114,7 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
   // log-odds +0 (OccupancyGrid stamps last_scan >= 1 at every write) and the table reads exactly
   // 0.5 there (its sample 3072 at l = 0, fraction 0), so the memo alone gives both cases.
   const auto probability = [&](const OccupancyCell& cell) { return logistic_memo(cell.log_odds, logistic); };
-  using CellGrid = TiledGrid<OccupancyCell>;
-  constexpr int kMask = CellGrid::kTileSize - 1;
-  const CellGrid& cells = grid.cells();
-  CellIndex tile_index{INT_MIN, INT_MIN};  // no tile has this index
-  const CellGrid::Tile* tile = nullptr;
+  CornerReader corners(grid);
   double sum = 0.0;
   std::size_t used = 0;
   for (std::size_t k = 0; k < points_robot.size(); k += stride, ++used) {
@@ -133,30 +129,7 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
       const CellIndex i{GridGeometry::floor_to_int(u), GridGeometry::floor_to_int(v)};
       const double fx = u - i.x;
       const double fy = v - i.y;
-      // occupancy_corners(grid, i, p) with p the table's logistic function (0.5 for unknown cells).
-      double m00 = 0.5;
-      double m10 = 0.5;
-      double m01 = 0.5;
-      double m11 = 0.5;
-      if ((i.x & kMask) != kMask && (i.y & kMask) != kMask) {
-        const CellIndex index = CellGrid::tile_of(i);
-        if (index != tile_index) {
-          tile = cells.find_tile(index);
-          tile_index = index;
-        }
-        if (tile != nullptr) {
-          const int offset = CellGrid::offset_in_tile(i);
-          m00 = probability(tile->cells[offset]);
-          m10 = probability(tile->cells[offset + 1]);
-          m01 = probability(tile->cells[offset + CellGrid::kTileSize]);
-          m11 = probability(tile->cells[offset + CellGrid::kTileSize + 1]);
-        }
-      } else {
-        m00 = probability(cells.at(i));
-        m10 = probability(cells.at({i.x + 1, i.y}));
-        m01 = probability(cells.at({i.x, i.y + 1}));
-        m11 = probability(cells.at({i.x + 1, i.y + 1}));
-      }
+      const auto [m00, m10, m01, m11] = corners(i, probability);  // 0.5 for unknown cells
       value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
     }
     const double r = 1.0 - value;
