@@ -31,17 +31,6 @@ BilinearCorner bilinear_corner(const GridGeometry& geometry, const Eigen::Vector
   return {CellIndex{i, j}, Eigen::Vector2d(u - i, v - j)};
 }
 
-BilinearSample bilinear_blend(double m00, double m10, double m01, double m11, const Eigen::Vector2d& fraction,
-                              double resolution) {
-  const double fx = fraction.x();
-  const double fy = fraction.y();
-  BilinearSample sample;
-  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);  // Eq. (4)
-  sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / resolution;                // Eq. (5)
-  sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / resolution;                // Eq. (6)
-  return sample;
-}
-
 BilinearSample interpolate_occupancy(const OccupancyGrid& grid, const Eigen::Vector2d& point) {
   const GridGeometry& geometry = grid.geometry();
   if (!geometry.in_index_range(point, GridGeometry::kMaxCellIndex - 2.0)) return {0.5, Eigen::Vector2d::Zero()};

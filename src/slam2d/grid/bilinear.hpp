@@ -38,8 +38,17 @@ BilinearCorner bilinear_corner(const GridGeometry& geometry, const Eigen::Vector
 
 /// Eq. (4)-(6) from the four corner values m00 = M(i, j), m10 = M(i + 1, j), m01 = M(i, j + 1),
 /// m11 = M(i + 1, j + 1).
-BilinearSample bilinear_blend(double m00, double m10, double m01, double m11, const Eigen::Vector2d& fraction,
-                              double resolution);
+inline BilinearSample bilinear_blend(double m00, double m10, double m01, double m11,
+                                     const Eigen::Vector2d& fraction, double resolution) {
+  const double fx = fraction.x();
+  const double fy = fraction.y();
+  BilinearSample sample;
+  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);  // Eq. (4)
+  sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / resolution;                // Eq. (5)
+  sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / resolution;                // Eq. (6)
+  return sample;
+}
+
 
 /// Eq. (4)-(6) over any cell value: value_of(CellIndex) -> double. `point` must be finite and
 /// within GridGeometry::kMaxCellIndex cells of the origin.
@@ -166,12 +175,7 @@ inline BilinearSample OccupancyInterpolator::operator()(const Eigen::Vector2d& p
   const double fx = u - i.x;
   const double fy = v - i.y;
   const auto [m00, m10, m01, m11] = corners_(i, [this](const OccupancyCell& cell) { return probability(cell); });
-  // bilinear_blend, Eq. (4)-(6), the same expressions.
-  BilinearSample sample;
-  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
-  sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / geometry_.resolution;
-  sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / geometry_.resolution;
-  return sample;
+  return bilinear_blend(m00, m10, m01, m11, Eigen::Vector2d(fx, fy), geometry_.resolution);
 }
 
 }  // namespace slam2d

@@ -23,7 +23,7 @@ double tukey_weight(double residual, double scale) {
   return v * v;
 }
 
-double RobustKernel::weight(double residual) const {
+double RobustKernel::kernel_weight(double residual) const {
   switch (type) {
     case RobustKernelType::kHuber: return huber_weight(residual, scale);
     case RobustKernelType::kCauchy: return cauchy_weight(residual, scale);

@@ -21,10 +21,13 @@ struct RobustKernel {
   RobustKernelType type = RobustKernelType::kNone;
   double scale = 1.0;  // k, in the residual's unit, > 0
 
-  /// The IRLS weight rho'(r) / r, in [0, 1].
-  double weight(double residual) const;
+  /// The IRLS weight rho'(r) / r, in [0, 1] (1 for kNone, inline: the common case in hot loops).
+  double weight(double residual) const { return type == RobustKernelType::kNone ? 1.0 : kernel_weight(residual); }
   /// The cost rho(r); r^2 / 2 for kNone, so all kernels agree with it near r = 0.
   double cost(double residual) const;
+
+ private:
+  double kernel_weight(double residual) const;  // weight() of the other kernels
 };
 
 double huber_weight(double residual, double scale);

@@ -21,8 +21,6 @@ namespace {
 
 using namespace pl_icp_detail;
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
 // ---------------------------------------------------------------------------------------------
 // Adds w (n^T (R p + t - q))^2 to the quadratic form of Eq. (4) (PointToLineProblem::add).
 [[gnu::always_inline]] inline void add_term(PointToLineProblem& problem, const Point2& p, const Point2& q, const Point2& n,

@@ -13,7 +13,6 @@ namespace {
 // The search compares bearings as pseudo-angles (pseudo_bearing below): a half turn is 2.
 constexpr double kHalfTurn = 2.0;
 constexpr double kFullTurn = 4.0;
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // ---------------------------------------------------------------------------------------------
 // A pseudo-angle of (x, y) in (-2, 2] ("diamond angle"): strictly increasing with the bearing

@@ -17,6 +17,7 @@
 // clearance - d away (triangle inequality). TrackedNearest carries that certificate from one
 // iteration to the next.
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -27,6 +28,7 @@
 namespace slam2d::pl_icp_detail {
 
 constexpr int kNone = -1;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kMinRange = 1e-3;  // m: target points this close to the sensor have no bearing
 
 /// The target, prepared once per match: its usable points in scan order with their ranges, unit

@@ -37,7 +37,6 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
   const Eigen::Vector2d& t = T_map_robot.translation();
   NormalEquations<3> equations;
   OccupancyInterpolator interpolate(grid);  // interpolate_occupancy, bit for bit
-  const bool plain = kernel.type == RobustKernelType::kNone;  // weight 1 (RobustKernel::weight), no call
   for (const Eigen::Vector2d& p : points_robot) {
     const Eigen::Vector2d S(c * p.x() - s * p.y() + t.x(), s * p.x() + c * p.y() + t.y());  // Eq. (7)
     const BilinearSample M = interpolate(S);
@@ -45,7 +44,7 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
     // grad M * dS/dxi, Eq. (14): the rotation column is dS/dpsi = (-s p_x - c p_y, c p_x - s p_y).
     const double d_psi = M.gradient.x() * (-s * p.x() - c * p.y()) + M.gradient.y() * (c * p.x() - s * p.y());
     const NormalEquations<3>::Row J(-M.gradient.x(), -M.gradient.y(), -d_psi);  // dr/dxi
-    equations.add(J, r, plain ? 1.0 : kernel.weight(r));
+    equations.add(J, r, kernel.weight(r));
   }
   return equations;
 }

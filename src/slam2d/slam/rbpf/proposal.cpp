@@ -109,11 +109,10 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
   const double sure_offset = 0.5 * kLimit * geometry.resolution;
   const auto logistic = [](float l) { return kLogistic(l); };
   thread_local FloatMemo<9> memo(logistic);  // this thread's
-  FloatMemo<9>& logistic_memo = memo;
   // 0.5 for unknown cells, else the table at the log-odds: an unknown cell holds the default
   // log-odds +0 (OccupancyGrid stamps last_scan >= 1 at every write) and the table reads exactly
   // 0.5 there (its sample 3072 at l = 0, fraction 0), so the memo alone gives both cases.
-  const auto probability = [&](const OccupancyCell& cell) { return logistic_memo(cell.log_odds, logistic); };
+  const auto probability = [&](const OccupancyCell& cell) { return memo(cell.log_odds, logistic); };
   CornerReader corners(grid);
   double sum = 0.0;
   std::size_t used = 0;
