@@ -178,5 +178,30 @@ TEST(Se2, InterpolateTakesTheShortWayRound) {
   EXPECT_TRUE(interpolate(a, b, 1.0).is_approx(b, 1e-12));
 }
 
+TEST(Se2, PoseBetweenAnchorsMeetsBothAnchorsAndSharesTheCorrection) {
+  const SE2 T_map_a(1.0, 2.0, 0.3);
+  const SE2 motion_ab(2.0, 0.0, 0.0);
+  // Anchors consistent with the motion: every pose is the plain chain from a.
+  const SE2 consistent_b = T_map_a * motion_ab;
+  const SE2 midway(1.0, 0.0, 0.0);
+  EXPECT_TRUE(pose_between_anchors(T_map_a, consistent_b, motion_ab, midway).is_approx(T_map_a * midway, 1e-12));
+  // b corrected by 0.2 m sideways and 0.1 rad: the chain starts at a, ends at b, and halfway along
+  // it is halfway between the forward and the backward chain.
+  const SE2 T_map_b = consistent_b * SE2(0.0, 0.2, 0.1);
+  EXPECT_TRUE(pose_between_anchors(T_map_a, T_map_b, motion_ab, SE2()).is_approx(T_map_a, 1e-12));
+  EXPECT_TRUE(pose_between_anchors(T_map_a, T_map_b, motion_ab, motion_ab).is_approx(T_map_b, 1e-12));
+  const SE2 forward = T_map_a * midway;
+  const SE2 backward = T_map_b * motion_ab.between(midway);
+  EXPECT_TRUE(pose_between_anchors(T_map_a, T_map_b, motion_ab, midway).is_approx(interpolate(forward, backward, 0.5), 1e-12));
+  // Rotation counts 1 m per radian: a pure turn of 0.5 rad out of 1 rad is halfway too.
+  const SE2 turn(0.0, 0.0, 1.0);
+  const SE2 half_turn(0.0, 0.0, 0.5);
+  const SE2 turned_b = T_map_a * turn * SE2(0.1, 0.0, 0.0);
+  EXPECT_TRUE(pose_between_anchors(T_map_a, turned_b, turn, half_turn)
+                  .is_approx(interpolate(T_map_a * half_turn, turned_b * turn.between(half_turn), 0.5), 1e-12));
+  // No motion between the anchors: the forward chain.
+  EXPECT_TRUE(pose_between_anchors(T_map_a, T_map_b, SE2(), SE2()).is_approx(T_map_a, 1e-12));
+}
+
 }  // namespace
 }  // namespace slam2d

@@ -1,6 +1,7 @@
 #include "slam2d/core/se2.hpp"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 
@@ -146,6 +147,18 @@ bool SE2::is_approx(const SE2& other, double tolerance) const {
 SE2 interpolate(const SE2& a, const SE2& b, double s) {
   return SE2(a.translation() + s * (b.translation() - a.translation()),
              a.theta() + s * angle_difference(b.theta(), a.theta()));
+}
+
+SE2 pose_between_anchors(const SE2& T_map_a, const SE2& T_map_b, const SE2& motion_ab, const SE2& motion_a_pose) {
+  const SE2 forward = T_map_a * motion_a_pose;
+  const SE2 backward = T_map_b * motion_ab.between(motion_a_pose);
+  constexpr double kMetresPerRadian = 1.0;
+  const auto extent = [&](const SE2& motion) {
+    return motion.translation().norm() + kMetresPerRadian * std::abs(motion.theta());
+  };
+  const double total = extent(motion_ab);
+  const double fraction = total > 1e-9 ? std::clamp(extent(motion_a_pose) / total, 0.0, 1.0) : 0.0;
+  return interpolate(forward, backward, fraction);
 }
 
 std::ostream& operator<<(std::ostream& os, const SE2& pose) {

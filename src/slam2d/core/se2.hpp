@@ -73,6 +73,13 @@ class SE2 {
 /// Linear interpolation of translation and shortest-path interpolation of the angle, s in [0, 1].
 SE2 interpolate(const SE2& a, const SE2& b, double s);
 
+/// A pose between two anchors a and b (keyframes, filter updates) placed in the map independently
+/// of the motion between them: `motion_a_pose` (the pose's motion from a) carried forward from a
+/// and backward from b (through `motion_ab`, the motion from a to b), blended by the fraction of
+/// that motion done (translation plus 1 m per radian). A chain of such poses meets both anchors
+/// and shares the correction at b between its links instead of jumping there.
+SE2 pose_between_anchors(const SE2& T_map_a, const SE2& T_map_b, const SE2& motion_ab, const SE2& motion_a_pose);
+
 std::ostream& operator<<(std::ostream& os, const SE2& pose);
 
 }  // namespace slam2d

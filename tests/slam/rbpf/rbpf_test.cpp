@@ -1,12 +1,14 @@
 // Rao-Blackwellized particle filter SLAM: N_eff and low-variance resampling against hand-computed
 // cases, the proposal's densities and likelihood lookup, one particle on a noiseless simulator
-// reducing to scan matching, determinism, copy-on-write map sharing, and the simulated office
-// loop closed with 30 particles.
+// reducing to scan matching, determinism, the written path through the update poses, copy-on-write
+// map sharing, and the simulated office loop closed with 30 particles.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/eval/ate.hpp"
@@ -200,6 +202,42 @@ TEST(RbpfSlam, SameSeedSameResultOtherSeedOtherResult) {
   EXPECT_TRUE(differs);
 }
 
+TEST(RbpfSlam, TrajectoryPassesThroughTheUpdatePosesAndSpreadsEachCorrection) {
+  SimulationConfig sim;
+  sim.duration = 60.0;
+  const SimulatedRun run = simulate(sim);
+  // One particle: the pose add_scan reports is the forward chain of the final path (its pose at
+  // the last update composed with the odometry since).
+  RbpfSlam slam({.particles = 1});
+  std::vector<std::size_t> update_scans;
+  std::vector<SE2> forward;
+  for (const LaserMessage* laser : laser_messages(run)) {
+    const RbpfStep step = slam.add_scan(laser->scan, laser->odom_pose);
+    if (step.updated) update_scans.push_back(forward.size());
+    forward.push_back(step.T_map_robot);
+  }
+  std::vector<SE2> path(update_scans.size());
+  for (const RbpfPathNode* node = slam.best().path.get(); node != nullptr; node = node->parent.get()) {
+    path[node->update] = node->T_map_robot;
+  }
+  const Trajectory trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), forward.size());
+  ASSERT_GT(update_scans.size(), 10u);
+  for (std::size_t k = 0; k < update_scans.size(); ++k) {
+    EXPECT_EQ(trajectory[update_scans[k]].pose, path[k]) << "update " << k;
+  }
+  // After the last update nothing is known ahead: the forward chain.
+  for (std::size_t i = update_scans.back(); i < forward.size(); ++i) EXPECT_EQ(trajectory[i].pose, forward[i]);
+  // Before it, the scans between two updates move off the forward chain towards the next update.
+  double largest_shift = 0.0;
+  for (std::size_t i = 0; i < update_scans.back(); ++i) {
+    largest_shift = std::max(largest_shift, (trajectory[i].pose.translation() - forward[i].translation()).norm());
+  }
+  RecordProperty("largest_shift_mm", static_cast<int>(1000 * largest_shift));
+  EXPECT_GT(largest_shift, 1e-3);
+  EXPECT_LT(largest_shift, 0.2);
+}
+
 TEST(RbpfSlam, ParticlesShareMapTilesUntilTheyWrite) {
   SimulationConfig sim;
   sim.duration = 10.0;
@@ -246,6 +284,12 @@ TEST(RbpfSlam, RejectsBadConfiguration) {
   EXPECT_THROW(RbpfSlam{config}, Error);
   config = {};
   config.start_noise = -0.1;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.scan_odometry_rotation_search = -0.1;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.scan_odometry_rotation_margin = 1.0;
   EXPECT_THROW(RbpfSlam{config}, Error);
 }
 

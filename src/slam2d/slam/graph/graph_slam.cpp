@@ -1,6 +1,5 @@
 #include "slam2d/slam/graph/graph_slam.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -161,23 +160,13 @@ void GraphSlam::finish() {
   if (graph_.poses.size() > 1) optimize();
 }
 
-// A scan between keyframes a and b: its tracked motion from a carried forward
-// from a's optimised pose and backward from b's, blended by how far along the motion from a to b
-// it is, so the chain of scans meets both optimised ends.
+// A scan between keyframes a and b: its tracked motion from a carried forward from a's optimised
+// pose and backward from b's (pose_between_anchors), so the chain of scans meets both optimised ends.
 SE2 GraphSlam::interpolated_pose(const ScanRecord& record) const {
   const SE2& T_map_a = graph_.poses[keyframes_[record.keyframe].node];
-  const SE2 forward = T_map_a * record.T_keyframe_robot;
-  if (record.keyframe + 1 >= keyframes_.size()) return forward;
+  if (record.keyframe + 1 >= keyframes_.size()) return T_map_a * record.T_keyframe_robot;
   const SE2& T_map_b = graph_.poses[keyframes_[record.keyframe + 1].node];
-  const SE2& motion_ab = keyframe_motion_[record.keyframe + 1];
-  const SE2 backward = T_map_b * motion_ab.between(record.T_keyframe_robot);
-  constexpr double kMetresPerRadian = 1.0;
-  const auto extent = [&](const SE2& motion) {
-    return motion.translation().norm() + kMetresPerRadian * std::abs(motion.theta());
-  };
-  const double total = extent(motion_ab);
-  const double fraction = total > 1e-9 ? std::clamp(extent(record.T_keyframe_robot) / total, 0.0, 1.0) : 0.0;
-  return interpolate(forward, backward, fraction);
+  return pose_between_anchors(T_map_a, T_map_b, keyframe_motion_[record.keyframe + 1], record.T_keyframe_robot);
 }
 
 Trajectory GraphSlam::trajectory() const {

@@ -32,6 +32,16 @@ MapPyramidConfig map_config(const RbpfConfig& config) {
   return map;
 }
 
+// The per-scan matching of the scan-matched odometry: the proposal's, with its own prior weight
+// and rotation multi-start.
+RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
+  RbpfProposalConfig matching = config.proposal;
+  matching.motion_prior_weight = config.scan_odometry_prior_weight;
+  matching.matcher.rotation_search_range = config.scan_odometry_rotation_search;
+  matching.matcher.rotation_search_margin = config.scan_odometry_rotation_margin;
+  return matching;
+}
+
 // Independent streams: one per (update, particle), one per update for the resampler (particle = N).
 Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
   return Rng(mix_seed(mix_seed(seed) ^ mix_seed((static_cast<std::uint64_t>(update) << 20) ^ particle)));
@@ -49,6 +59,7 @@ void validate(const RbpfConfig& config) {
         "RbpfConfig: update thresholds must be finite and >= 0");
   check(non_negative(config.start_noise), "RbpfConfig: start_noise must be finite and >= 0");
   check(non_negative(config.scan_odometry_prior_weight), "RbpfConfig: scan_odometry_prior_weight must be finite and >= 0");
+  validate(scan_odometry_matching(config).matcher);
   check(config.resample_threshold >= 0.0 && config.resample_threshold <= 1.0,
         "RbpfConfig: resample_threshold must be in [0, 1]");
   validate(config.proposal);
@@ -181,10 +192,8 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot)
     const SE2 previous = particle.T_map_robot * update_odometry_.back().between(last_corrected_odometry_);
     const SE2 predicted = previous * delta;
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
-    RbpfProposalConfig matching = config_.proposal;
-    matching.motion_prior_weight = config_.scan_odometry_prior_weight;
-    const ProposalResult match =
-        improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion), matching, /*fit=*/false);
+    const ProposalResult match = improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion),
+                                                   scan_odometry_matching(config_), /*fit=*/false);
     if (match.matched) corrected = last_corrected_odometry_ * previous.between(match.x_star);
   }
   last_raw_odometry_ = T_odom_robot;
@@ -240,8 +249,13 @@ Trajectory RbpfSlam::trajectory() const {
   }
   trajectory.reserve(scans_.size());
   for (const ScanRecord& record : scans_) {
-    const SE2 u = update_odometry_[record.update].between(record.T_odom_robot);
-    trajectory.push_back(record.stamp, update_pose[record.update] * u);
+    const std::size_t k = record.update;
+    const SE2 since_update = update_odometry_[k].between(record.T_odom_robot);
+    const SE2 pose = k + 1 < update_pose.size()
+                         ? pose_between_anchors(update_pose[k], update_pose[k + 1],
+                                                update_odometry_[k].between(update_odometry_[k + 1]), since_update)
+                         : update_pose[k] * since_update;
+    trajectory.push_back(record.stamp, pose);
   }
   return trajectory;
 }

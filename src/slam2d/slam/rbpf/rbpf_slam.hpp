@@ -68,6 +68,14 @@ struct RbpfConfig {
   // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight):
   // weak, since wheel odometry can be wrong by 0.2 m over one scan (FR079).
   double scan_odometry_prior_weight = 0.05;  // 1, >= 0
+  // Rotation multi-start of that per-scan matching (HectorMatcherConfig::rotation_search_*): the
+  // prediction turned by k * 0.1 rad, |k * 0.1| <= scan_odometry_rotation_search, is matched on the
+  // coarsest level too, and a turned start goes on when it lowers the cost by the margin. Wheel
+  // odometry's heading can be off by several degrees after one fast turn (ACES: up to 8 deg);
+  // Gauss-Newton from there settles in a wrong minimum and every particle inherits the error. The
+  // margin keeps repetitive rooms (Intel) from snapping to a wrong heading. 0 disables it.
+  double scan_odometry_rotation_search = 0.2;  // rad, >= 0
+  double scan_odometry_rotation_margin = 0.1;  // 1, in [0, 1)
 };
 
 /// Throws Error for settings outside the documented ranges.
@@ -122,8 +130,10 @@ class RbpfSlam {
   /// The best particle (largest accumulated weight; the lowest index on ties).
   std::size_t best_index() const;
   const RbpfParticle& best() const { return particles_[best_index()]; }
-  /// The best particle's path, one pose per scan added: at each update its pose there, between
-  /// updates that pose composed with the odometry motion since.
+  /// The best particle's path, one pose per scan added: at each update its pose there; between
+  /// two updates the odometry motion since the first, carried forward from the first update's pose
+  /// and backward from the second's and blended (pose_between_anchors), so the correction the
+  /// second update made is shared by the scans before it; after the last update, carried forward.
   Trajectory trajectory() const;
   /// The best particle's finest map level.
   const OccupancyGrid& map() const { return best().map.level(0); }
