@@ -291,6 +291,9 @@ TEST(RbpfSlam, RejectsBadConfiguration) {
   config = {};
   config.scan_odometry_rotation_margin = 1.0;
   EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.scan_odometry_rotation_step = 0.0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
 }
 
 }  // namespace

@@ -38,6 +38,7 @@ RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
   RbpfProposalConfig matching = config.proposal;
   matching.motion_prior_weight = config.scan_odometry_prior_weight;
   matching.matcher.rotation_search_range = config.scan_odometry_rotation_search;
+  matching.matcher.rotation_search_step = config.scan_odometry_rotation_step;
   matching.matcher.rotation_search_margin = config.scan_odometry_rotation_margin;
   return matching;
 }

@@ -69,13 +69,14 @@ struct RbpfConfig {
   // weak, since wheel odometry can be wrong by 0.2 m over one scan (FR079).
   double scan_odometry_prior_weight = 0.05;  // 1, >= 0
   // Rotation multi-start of that per-scan matching (HectorMatcherConfig::rotation_search_*): the
-  // prediction turned by k * 0.1 rad, |k * 0.1| <= scan_odometry_rotation_search, is matched on the
+  // prediction turned by k * step, |k * step| <= scan_odometry_rotation_search, is matched on the
   // coarsest level too, and a turned start goes on when it lowers the cost by the margin. Wheel
   // odometry's heading can be off by several degrees after one fast turn (ACES: up to 8 deg);
   // Gauss-Newton from there settles in a wrong minimum and every particle inherits the error. The
   // margin keeps repetitive rooms (Intel) from snapping to a wrong heading. 0 disables it.
   double scan_odometry_rotation_search = 0.2;  // rad, >= 0
-  double scan_odometry_rotation_margin = 0.1;  // 1, in [0, 1)
+  double scan_odometry_rotation_step = 0.05;   // rad, > 0
+  double scan_odometry_rotation_margin = 0.2;  // 1, in [0, 1)
 };
 
 /// Throws Error for settings outside the documented ranges.
