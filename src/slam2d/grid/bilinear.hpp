@@ -36,14 +36,19 @@ struct BilinearCorner {
 };
 BilinearCorner bilinear_corner(const GridGeometry& geometry, const Eigen::Vector2d& point);
 
-/// Eq. (4)-(6) from the four corner values m00 = M(i, j), m10 = M(i + 1, j), m01 = M(i, j + 1),
-/// m11 = M(i + 1, j + 1).
+/// Eq. (4) alone: the value at fractions (fx, fy) of the square from the four corner values
+/// m00 = M(i, j), m10 = M(i + 1, j), m01 = M(i, j + 1), m11 = M(i + 1, j + 1).
+inline double bilinear_value(double m00, double m10, double m01, double m11, double fx, double fy) {
+  return (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
+}
+
+/// Eq. (4)-(6) from the four corner values (bilinear_value's) and the fractions.
 inline BilinearSample bilinear_blend(double m00, double m10, double m01, double m11,
                                      const Eigen::Vector2d& fraction, double resolution) {
   const double fx = fraction.x();
   const double fy = fraction.y();
   BilinearSample sample;
-  sample.value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);  // Eq. (4)
+  sample.value = bilinear_value(m00, m10, m01, m11, fx, fy);                                     // Eq. (4)
   sample.gradient.x() = ((1.0 - fy) * (m10 - m00) + fy * (m11 - m01)) / resolution;                // Eq. (5)
   sample.gradient.y() = ((1.0 - fx) * (m01 - m00) + fx * (m11 - m10)) / resolution;                // Eq. (6)
   return sample;

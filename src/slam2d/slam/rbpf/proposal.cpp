@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <array>
-#include <climits>
 #include <cmath>
 #include <numbers>
 
@@ -129,7 +128,7 @@ double log_observation_likelihood(const OccupancyGrid& grid, const std::vector<E
       const double fx = u - i.x;
       const double fy = v - i.y;
       const auto [m00, m10, m01, m11] = corners(i, probability);  // 0.5 for unknown cells
-      value = (1.0 - fy) * ((1.0 - fx) * m00 + fx * m10) + fy * ((1.0 - fx) * m01 + fx * m11);
+      value = bilinear_value(m00, m10, m01, m11, fx, fy);
     }
     const double r = 1.0 - value;
     sum += r * r;
