@@ -54,7 +54,6 @@ inline BilinearSample bilinear_blend(double m00, double m10, double m01, double 
   return sample;
 }
 
-
 /// Eq. (4)-(6) over any cell value: value_of(CellIndex) -> double. `point` must be finite and
 /// within GridGeometry::kMaxCellIndex cells of the origin.
 template <typename ValueOf>
