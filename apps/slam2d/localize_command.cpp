@@ -15,6 +15,7 @@
 
 #include "commands.hpp"
 #include "json.hpp"
+#include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
 #include "slam2d/core/angles.hpp"
@@ -156,6 +157,7 @@ void run_localize(const LocalizeOptions& options) {
   summary.add("method", options.method).add("log", options.log).add("map", options.map);
   if (options.method == "mcl") summary.add("particles", options.particles).add("sensor", options.sensor);
   if (options.reverse_from_tv) summary.add("odometry_steps_reversed", repair.reversed_steps());
+  summary.merge(odometry_report(session.odometry_stats()));
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
   summary.add("us_per_update", 1e6 * run.localizer_cpu_s / static_cast<double>(std::max<std::size_t>(run.sensor_updates, 1)));

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
 #include "slam2d/core/error.hpp"
@@ -89,6 +90,7 @@ MappingRun map_with_hector(const MapJobOptions& options) {
     return slam.add_scan(laser.scan, inputs).T_map_robot;
   });
   run.map = slam.map().level(0).to_occupancy_map();
+  if (!options.no_odometry) run.method_summary.merge(odometry_report(slam.odometry_stats()));
   return run;
 }
 
@@ -112,6 +114,7 @@ MappingRun map_with_graph(const MapJobOptions& options) {
   run.method_summary.add("loop_attempts", stats.loop_attempts);
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
+  if (!options.no_odometry) run.method_summary.merge(odometry_report(slam.odometry_stats()));
   return run;
 }
 
@@ -135,6 +138,7 @@ MappingRun map_with_rbpf(const MapJobOptions& options) {
   run.method_summary.add("threads", options.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
+  run.method_summary.merge(odometry_report(slam.odometry_stats()));
   return run;
 }
 

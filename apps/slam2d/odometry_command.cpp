@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "json.hpp"
+#include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
 #include "slam2d/core/angles.hpp"
@@ -86,6 +87,7 @@ void run_odometry(const OdometryOptions& options) {
   summary.add("mean_iterations", static_cast<double>(stats.total_iterations) / matches).add("failures", stats.failures);
   summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
   summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
+  if (!options.no_odometry) summary.merge(odometry_report(odometry.odometry_stats()));
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
 }
 

@@ -4,17 +4,18 @@
 
 namespace slam2d {
 
-LocalizationSession::LocalizationSession(Localizer& localizer, std::optional<Kidnap> kidnap)
-    : localizer_(localizer), kidnap_(kidnap) {}
+LocalizationSession::LocalizationSession(Localizer& localizer, std::optional<Kidnap> kidnap,
+                                         const OdometryGuardConfig& odometry_guard)
+    : localizer_(localizer), kidnap_(kidnap), odometry_guard_(odometry_guard) {}
 
 const LocalizationEstimate& LocalizationSession::add(const SE2& T_odom_robot, const LaserScan& scan) {
+  const OdometryCheck odometry = odometry_guard_.check(scan.stamp, T_odom_robot);
   if (summary_.scans == 0) {
     first_stamp_ = scan.stamp;
     seen_odom_ = T_odom_robot;
-  } else {
-    seen_odom_ = seen_odom_ * last_odom_.between(T_odom_robot);
+  } else if (odometry.trusted()) {  // an untrusted increment (stall, catch-up, jump) moves nothing
+    seen_odom_ = seen_odom_ * odometry.increment;
   }
-  last_odom_ = T_odom_robot;
   const double t = scan.stamp - first_stamp_;
   if (kidnap_ && !summary_.kidnapped_at_s && t >= kidnap_->at) {
     seen_odom_ = seen_odom_ * kidnap_->by;

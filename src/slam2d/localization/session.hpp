@@ -1,7 +1,8 @@
 #pragma once
 // One localization run over a log, the way `slam2d localize` and the tests drive a localizer:
-// feeds the scans, optionally kidnaps the robot (corrupts the odometry once), times the
-// localizer, and keeps the events the summary reports.
+// feeds the scans with their odometry checked by the odometry guard (core/odometry_guard.hpp: an
+// untrusted increment moves nothing), optionally kidnaps the robot (corrupts the odometry once),
+// times the localizer, and keeps the events the summary reports.
 //
 // - converged_at_s: seconds of data from the first scan to the first step reported localized.
 // - lost_events: steps where the state went from localized to not localized.
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/localization/localizer.hpp"
@@ -42,12 +44,14 @@ struct LocalizationRunSummary {
 
 class LocalizationSession {
  public:
-  explicit LocalizationSession(Localizer& localizer, std::optional<Kidnap> kidnap = std::nullopt);
+  explicit LocalizationSession(Localizer& localizer, std::optional<Kidnap> kidnap = std::nullopt,
+                               const OdometryGuardConfig& odometry_guard = {});
 
   /// One scan with the robot's odometry pose at its stamp.
   const LocalizationEstimate& add(const SE2& T_odom_robot, const LaserScan& scan);
 
   const LocalizationRunSummary& summary() const { return summary_; }
+  const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
   const Trajectory& trajectory() const { return trajectory_; }
   /// Whether each step was localized, one per trajectory pose.
   const std::vector<bool>& localized() const { return localized_; }
@@ -60,8 +64,8 @@ class LocalizationSession {
   std::vector<bool> localized_;
   LocalizationEstimate last_;
   double first_stamp_ = 0.0;
-  SE2 last_odom_;
-  SE2 seen_odom_;  // the odometry the localizer sees (with the kidnap)
+  OdometryGuard odometry_guard_;
+  SE2 seen_odom_;  // the odometry the localizer sees (guarded, with the kidnap)
   std::optional<double> lost_since_;  // relative time of the lost event that recovery is measured from
 };
 

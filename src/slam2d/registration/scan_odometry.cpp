@@ -33,7 +33,7 @@ void validate(const ScanOdometryConfig& config) {
 }
 
 ScanOdometry::ScanOdometry(Matcher matcher, const ScanOdometryConfig& config)
-    : matcher_(std::move(matcher)), config_(config) {
+    : matcher_(std::move(matcher)), config_(config), odometry_guard_(config.odometry_guard) {
   check(static_cast<bool>(matcher_), "scan odometry: no matcher given");
   validate(config_);
 }
@@ -51,7 +51,8 @@ PointCloud2 ScanOdometry::usable_cloud(const LaserScan& scan) const {
   return cloud;
 }
 
-// The motion from the keyframe to the new scan: odometry when both have it, else constant velocity.
+// The motion from the keyframe to the new scan: odometry when both have it (odom_pose is given
+// only when the guard trusts this scan's increment), else constant velocity.
 SE2 ScanOdometry::predict(double stamp, const std::optional<SE2>& odom_pose) const {
   if (odom_pose && keyframe_->odom_pose) return keyframe_->odom_pose->between(*odom_pose);
   const SE2 T_keyframe_previous = keyframe_->T_world_robot.between(T_world_previous_);
@@ -85,16 +86,23 @@ void ScanOdometry::update_velocity(double stamp, const SE2& T_world_robot) {
 SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   ++stats_.scans;
   PointCloud2 cloud = usable_cloud(scan);
+  // The guarded odometry pose (the odometry with every untrusted increment replaced, below, by
+  // the motion the scan is estimated to have made), or none when this increment is not trusted.
+  std::optional<SE2> guarded;
+  if (odom_pose && odometry_guard_.check(scan.stamp, *odom_pose).trusted()) {
+    guarded = odometry_correction_ ? *odometry_correction_ * *odom_pose : *odom_pose;
+  }
   if (!keyframe_) {  // the first scan fixes the world frame
     const SE2 pose = odom_pose.value_or(SE2());
     keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
+    if (odom_pose) guarded_previous_ = *odom_pose;
     ++stats_.keyframes;
     T_world_previous_ = pose;
     previous_stamp_ = scan.stamp;
     trajectory_.push_back(scan.stamp, pose);
     return pose;
   }
-  const SE2 guess = predict(scan.stamp, odom_pose);  // T_keyframe_robot
+  const SE2 guess = predict(scan.stamp, guarded);  // T_keyframe_robot
   SE2 T_keyframe_robot = guess;
   last_accepted_ = false;
   if (cloud.size() >= 3) {
@@ -111,13 +119,18 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   }
   if (!last_accepted_) ++stats_.failures;
   const SE2 pose = keyframe_->T_world_robot * T_keyframe_robot;
+  if (odom_pose && !guarded) {  // the estimated motion stands in for the untrusted increment
+    guarded = guarded_previous_ * T_world_previous_.between(pose);
+    odometry_correction_ = *guarded * odom_pose->inverse();
+  }
+  if (guarded) guarded_previous_ = *guarded;
   update_velocity(scan.stamp, pose);
   trajectory_.push_back(scan.stamp, pose);
   const bool moved = T_keyframe_robot.translation().norm() >= config_.keyframe_distance ||
                      std::abs(T_keyframe_robot.theta()) >= config_.keyframe_angle;
   const bool lost = !last_accepted_ && cloud.size() >= 3;
   if (moved || lost) {
-    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
+    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, guarded};
     ++stats_.keyframes;
   }
   return pose;

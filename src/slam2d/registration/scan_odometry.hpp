@@ -6,7 +6,8 @@
 // kf_dist_angular = 10 deg, the defaults here). Matching against a keyframe instead of the
 // previous scan keeps a slow or standing robot from integrating the matcher's noise.
 //
-// The initial guess is the wheel odometry between the keyframe and the scan when both have it,
+// The initial guess is the wheel odometry between the keyframe and the scan when both have it
+// (checked increment by increment: core/odometry_guard.hpp),
 // moved into the sensor frames with each scan's T_robot_sensor; else a constant-velocity
 // prediction (the last relative motion per second, extrapolated over the scan's time step, or
 // no motion after a gap longer than max_guess_dt). A match is accepted when it passes the gate
@@ -28,6 +29,7 @@
 #include <optional>
 
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
@@ -47,6 +49,10 @@ struct ScanOdometryConfig {
   double max_residual = 0.1;               // m, > 0: gate on the matcher's RMS residual
   double max_correction_distance = 0.5;    // m, > 0: gate on |t| of guess^-1 * result (CSM ROS: 0.5)
   double max_correction_angle = 0.5;       // rad, > 0: gate on |theta| of guess^-1 * result
+  // Each odometry increment is checked first (core/odometry_guard.hpp); a scan whose increment is
+  // not trusted (a stall, its catch-up, a jump) is predicted by constant velocity, and its
+  // estimated motion replaces the increment in the odometry the next predictions start from.
+  OdometryGuardConfig odometry_guard{};
 };
 
 /// Throws Error for values outside the ranges above.
@@ -75,6 +81,7 @@ class ScanOdometry {
   const MatchResult& last_match() const { return last_match_; }  // of the last matched scan
   bool last_accepted() const { return last_accepted_; }          // whether the last scan's match passed the gate
   const ScanOdometryConfig& config() const { return config_; }
+  const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
 
  private:
   struct Keyframe {
@@ -91,6 +98,11 @@ class ScanOdometry {
 
   Matcher matcher_;
   ScanOdometryConfig config_;
+  OdometryGuard odometry_guard_;
+  // The odometry with each untrusted increment replaced by the estimated motion: correction * raw
+  // (none until the first untrusted increment, so clean odometry is used exactly as logged).
+  std::optional<SE2> odometry_correction_;
+  SE2 guarded_previous_;  // the guarded odometry pose of the last scan
   std::optional<Keyframe> keyframe_;
   SE2 T_world_previous_;          // the last scan's pose
   double previous_stamp_ = 0.0;   // s

@@ -97,6 +97,8 @@ class GraphSlam {
   /// The occupancy map of the keyframes' scans at their optimised poses.
   OccupancyMap map() const;
   const GraphSlamStats& stats() const { return stats_; }
+  /// What the tracker's odometry guard found (empty before the first scan or without odometry).
+  OdometryGuardStats odometry_stats() const { return tracker_ ? tracker_->odometry_stats() : OdometryGuardStats{}; }
   const GraphSlamConfig& config() const { return config_; }
 
  private:

@@ -54,21 +54,27 @@ void validate(const HectorSlamConfig& config) {
   validate(config.matcher);
 }
 
-HectorSlam::HectorSlam(const HectorSlamConfig& config) : config_(config), map_(map_config(config)) {
+HectorSlam::HectorSlam(const HectorSlamConfig& config)
+    : config_(config), odometry_guard_(config.odometry_guard), map_(map_config(config)) {
   validate(config_);
-  if (config_.prior != MotionPrior::kOdometry) {
-    config_.matcher.rotation_search_range = config_.rotation_search_without_odometry;
-    config_.matcher.rotation_search_margin = config_.rotation_margin_without_odometry;
-    config_.recovery_residual = config_.recovery_residual_without_odometry;
-  }
-  validate(config_.matcher);
+  free_matcher_ = config_.matcher;
+  free_matcher_.rotation_search_range = config_.rotation_search_without_odometry;
+  free_matcher_.rotation_search_margin = config_.rotation_margin_without_odometry;
+  free_matcher_.degeneracy_ratio = 0.0;  // the directions a scan leaves open have no measurement to stay at
+  free_recovery_residual_ = config_.recovery_residual_without_odometry;
+  validate(free_matcher_);
 }
+
+// The odometry prior is in force and the guard trusts this scan's increment.
+bool HectorSlam::odometry_trusted() const { return config_.prior == MotionPrior::kOdometry && odometry_.trusted(); }
 
 HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& inputs) {
   check(config_.prior != MotionPrior::kOdometry || inputs.T_odom_robot.has_value(),
         "HectorSlam: the odometry prior needs an odometry pose with every scan");
   HectorStep step;
-  step.prediction = predict(scan, inputs);
+  if (config_.prior == MotionPrior::kOdometry) odometry_ = odometry_guard_.check(scan.stamp, *inputs.T_odom_robot);
+  step.odometry = odometry_;
+  step.prediction = predict(scan);
   step.T_map_robot = step.prediction;
   LaserScan corrected = scan;
   if (config_.sweep_duration > 0.0) {
@@ -88,7 +94,6 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   previous_pose_ = last_pose_;
   last_pose_ = step.T_map_robot;
   last_stamp_ = scan.stamp;
-  last_odom_ = inputs.T_odom_robot;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
   return step;
 }
@@ -97,37 +102,59 @@ HectorMatchResult HectorSlam::match(const LaserScan& scan, const LaserScan& corr
                                     const SE2& prediction) const {
   std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
-  const std::optional<PosePrior> prior = pose_prior(scan, inputs);
-  HectorMatchResult result = match_scan_to_pyramid(map_, points, prediction, config_.matcher, prior);
-  if (result.mean_squared_residual > config_.recovery_residual) {
-    // A poor fit (e.g. the robot turned during a gap in the log): retry over every heading.
-    HectorMatcherConfig wide = config_.matcher;
+  const bool with_odometry = odometry_trusted();
+  HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(scan) : std::nullopt);
+  if (const std::optional<SE2> start = competing_start()) {
+    HectorMatchResult alternative = match_from(points, *start, false, std::nullopt);
+    if (alternative.equations.cost < result.equations.cost) result = std::move(alternative);
+  }
+  return result;
+}
+
+// Gauss-Newton on the pyramid from `start`, with the odometry settings or those without, and
+// the retry over every heading after a poor fit (e.g. the robot turned during a gap in the log).
+HectorMatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start,
+                                         bool with_odometry, const std::optional<PosePrior>& prior) const {
+  const HectorMatcherConfig& matcher = with_odometry ? config_.matcher : free_matcher_;
+  HectorMatchResult result = match_scan_to_pyramid(map_, points, start, matcher, prior);
+  if (result.mean_squared_residual > (with_odometry ? config_.recovery_residual : free_recovery_residual_)) {
+    HectorMatcherConfig wide = matcher;
     wide.rotation_search_range = std::numbers::pi;
-    HectorMatchResult retry = match_scan_to_pyramid(map_, points, prediction, wide, prior);
+    HectorMatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
     if (retry.equations.cost < result.equations.cost) result = std::move(retry);
   }
   return result;
 }
 
-// The Gaussian prior at the motion prediction (constant velocity when the guess is the last pose).
-std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan, const HectorInputs& inputs) const {
+// A jump may be a fault or a fast motion the bounds did not foresee: the guard cannot tell, so a
+// second match starts from the odometry, and the better fit wins. Stalls and catch-ups have none:
+// their increment repeats motion already followed.
+std::optional<SE2> HectorSlam::competing_start() const {
+  if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.fault != OdometryFault::kJump) {
+    return std::nullopt;
+  }
+  return *last_pose_ * odometry_.increment;
+}
+
+// The Gaussian prior at the motion prediction (constant velocity when the guess is the last pose);
+// none where the odometry prior is in force but this scan's increment is not trusted.
+std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan) const {
   if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
+  if (config_.prior == MotionPrior::kOdometry && !odometry_.trusted()) return std::nullopt;
   const MotionPrior model = config_.prior == MotionPrior::kLastPose ? MotionPrior::kConstantVelocity : config_.prior;
   const Eigen::Vector3d information(config_.prior_information_translation, config_.prior_information_translation,
                                     config_.prior_information_rotation);
-  return PosePrior{.mean = predict(scan, inputs, model), .information = information.asDiagonal()};
+  return PosePrior{.mean = predict(scan, model), .information = information.asDiagonal()};
 }
 
-SE2 HectorSlam::predict(const LaserScan& scan, const HectorInputs& inputs) const {
-  return predict(scan, inputs, config_.prior);
-}
+SE2 HectorSlam::predict(const LaserScan& scan) const { return predict(scan, config_.prior); }
 
-SE2 HectorSlam::predict(const LaserScan& scan, const HectorInputs& inputs, MotionPrior prior) const {
+SE2 HectorSlam::predict(const LaserScan& scan, MotionPrior prior) const {
   if (!last_pose_) return SE2::identity();
   switch (prior) {
     case MotionPrior::kOdometry:
-      if (last_odom_ && inputs.T_odom_robot) return *last_pose_ * last_odom_->between(*inputs.T_odom_robot);
-      return *last_pose_;
+      if (odometry_.trusted()) return *last_pose_ * odometry_.increment;
+      return *last_pose_;  // as without odometry
     case MotionPrior::kConstantVelocity: {
       // The last motion, scaled to this time step; the scale is clamped to [0.5, 2] (and 1 when a
       // stamp steps back) so that out-of-order or jittery stamps cannot blow the extrapolation up.

@@ -12,6 +12,7 @@
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
@@ -21,7 +22,8 @@
 namespace slam2d {
 
 enum class MotionPrior {
-  kOdometry,          // last estimate * (odometry delta since the last scan); needs odometry poses
+  kOdometry,          // last estimate * (odometry delta since the last scan) when the odometry
+                      // guard trusts it, else the last estimate; needs odometry poses
   kConstantVelocity,  // last estimate * (the last estimated motion, scaled to the time step)
   kLastPose,          // the last estimate (Hector's default without odometry)
 };
@@ -55,6 +57,12 @@ struct HectorSlamConfig {
   double rotation_search_without_odometry = 0.4;   // rad, for matcher.rotation_search_range
   double rotation_margin_without_odometry = 0.1;   // 1, for matcher.rotation_search_margin
   double recovery_residual_without_odometry = 0.25;  // 1, for recovery_residual
+  // With the odometry prior, each increment is checked first (core/odometry_guard.hpp): a scan
+  // whose increment is not trusted (a stall, its catch-up, a jump) is matched as without
+  // odometry: from the last pose, with the settings above, no prior and no solution remapping.
+  // A jump is matched from both the last pose and the odometry, and the better fit is kept
+  // (HectorSlam::competing_start).
+  OdometryGuardConfig odometry_guard{};
 };
 
 /// Extra inputs of one scan.
@@ -71,6 +79,7 @@ struct HectorStep {
   HectorMatchResult match;                       // empty on the first scan
   bool matched = false;                          // false on the first scan (no map yet)
   bool map_updated = false;
+  OdometryCheck odometry;                        // the guard's verdict (kOdometry prior only)
 };
 
 /// Throws Error for negative or non-finite ranges/thresholds, min_range >= max_range, or an invalid
@@ -89,21 +98,29 @@ class HectorSlam {
   const Trajectory& trajectory() const { return trajectory_; }
   std::size_t map_updates() const { return map_updates_; }
   const HectorSlamConfig& config() const { return config_; }
+  const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
 
  private:
   HectorMatchResult match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
                           const SE2& prediction) const;
-  std::optional<PosePrior> pose_prior(const LaserScan& scan, const HectorInputs& inputs) const;
-  SE2 predict(const LaserScan& scan, const HectorInputs& inputs) const;
-  SE2 predict(const LaserScan& scan, const HectorInputs& inputs, MotionPrior prior) const;
+  HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
+                               const std::optional<PosePrior>& prior) const;
+  std::optional<SE2> competing_start() const;
+  std::optional<PosePrior> pose_prior(const LaserScan& scan) const;
+  bool odometry_trusted() const;
+  SE2 predict(const LaserScan& scan) const;
+  SE2 predict(const LaserScan& scan, MotionPrior prior) const;
   double angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const;
   bool needs_map_update(const SE2& T_map_robot) const;
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
 
   HectorSlamConfig config_;
+  HectorMatcherConfig free_matcher_;  // the matcher's settings without (trusted) odometry
+  double free_recovery_residual_ = 0.0;
+  OdometryGuard odometry_guard_;
+  OdometryCheck odometry_;             // the guard's verdict on this scan's odometry
   MapPyramid map_;
   Trajectory trajectory_;
-  std::optional<SE2> last_odom_;       // odometry pose at the previous scan
   std::optional<SE2> last_pose_;       // estimate at the previous scan
   std::optional<SE2> previous_pose_;   // estimate at the scan before that
   double last_stamp_ = 0.0;

@@ -74,7 +74,7 @@ RbpfPathNode::~RbpfPathNode() {
   while (next && next.use_count() == 1) next = std::move(next->parent);
 }
 
-RbpfSlam::RbpfSlam(const RbpfConfig& config) : config_(config) {
+RbpfSlam::RbpfSlam(const RbpfConfig& config) : config_(config), odometry_guard_(config.odometry_guard) {
   validate(config_);
   const int threads = std::min(config_.threads == 0 ? tbb::info::default_concurrency() : config_.threads,
                                config_.particles);
@@ -184,8 +184,11 @@ bool RbpfSlam::resample_if_needed() {
   return true;
 }
 
-SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot) {
-  const SE2 delta = last_raw_odometry_.between(T_odom_robot);
+// The scan's pose in the odometry frame the filter runs on: the last one moved by the wheel
+// odometry's increment when the guard trusts it, else not moved, then matched against the best
+// particle's map (without the motion prior when the increment was not trusted).
+SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry) {
+  const SE2 delta = odometry.trusted() ? odometry.increment : SE2();
   SE2 corrected = last_corrected_odometry_ * delta;
   if (config_.scan_matched_odometry) {
     // The previous scan's pose in the best particle's map, the prediction, the match.
@@ -193,22 +196,21 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot)
     const SE2 previous = particle.T_map_robot * update_odometry_.back().between(last_corrected_odometry_);
     const SE2 predicted = previous * delta;
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
+    RbpfProposalConfig matching = scan_odometry_matching(config_);
+    if (!odometry.trusted()) matching.motion_prior_weight = 0.0;
     const ProposalResult match = improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion),
-                                                   scan_odometry_matching(config_), /*fit=*/false);
+                                                   matching, /*fit=*/false);
     if (match.matched) corrected = last_corrected_odometry_ * previous.between(match.x_star);
   }
-  last_raw_odometry_ = T_odom_robot;
   last_corrected_odometry_ = corrected;
   return corrected;
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
   RbpfStep step;
-  if (scans_.empty()) {
-    last_raw_odometry_ = wheel_odometry;
-    last_corrected_odometry_ = wheel_odometry;
-  }
-  const SE2 T_odom_robot = scans_.empty() ? wheel_odometry : corrected_odometry(scan, wheel_odometry);
+  const OdometryCheck odometry = odometry_guard_.check(scan.stamp, wheel_odometry);
+  if (scans_.empty()) last_corrected_odometry_ = wheel_odometry;
+  const SE2 T_odom_robot = scans_.empty() ? wheel_odometry : corrected_odometry(scan, odometry);
   if (scans_.empty()) {
     initialise(scan, T_odom_robot);
     update_odometry_.push_back(T_odom_robot);

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
@@ -77,6 +78,10 @@ struct RbpfConfig {
   double scan_odometry_rotation_search = 0.2;  // rad, >= 0
   double scan_odometry_rotation_step = 0.05;   // rad, > 0
   double scan_odometry_rotation_margin = 0.2;  // 1, in [0, 1)
+  // Each wheel-odometry increment is checked first (core/odometry_guard.hpp); one that is not
+  // trusted (a stall, its catch-up, a jump) is replaced by no motion, and the per-scan matching
+  // finds the motion without the prior.
+  OdometryGuardConfig odometry_guard{};
 };
 
 /// Throws Error for settings outside the documented ranges.
@@ -140,6 +145,7 @@ class RbpfSlam {
   const OccupancyGrid& map() const { return best().map.level(0); }
   const std::vector<RbpfParticle>& particles() const { return particles_; }
   const RbpfStats& stats() const { return stats_; }
+  const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
   const RbpfConfig& config() const { return config_; }
 
  private:
@@ -158,11 +164,11 @@ class RbpfSlam {
     std::size_t update = 0;  // the last update at or before this scan
   };
 
-  SE2 corrected_odometry(const LaserScan& scan, const SE2& T_odom_robot);
+  SE2 corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry);
 
   RbpfConfig config_;
   std::shared_ptr<RbpfWorkers> workers_;  // null when serial (threads resolve to 1)
-  SE2 last_raw_odometry_;        // wheel odometry at the previous scan
+  OdometryGuard odometry_guard_;
   SE2 last_corrected_odometry_;  // scan-matched odometry at the previous scan
   std::vector<RbpfParticle> particles_;
   std::vector<ScanRecord> scans_;

@@ -1,0 +1,95 @@
+#include "slam2d/core/odometry_guard.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+namespace {
+
+bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
+bool positive(double value) { return std::isfinite(value) && value > 0.0; }
+
+}  // namespace
+
+void validate(const OdometryGuardConfig& config) {
+  check(non_negative(config.frozen_translation) && non_negative(config.frozen_rotation),
+        "OdometryGuardConfig: frozen_translation and frozen_rotation must be finite and >= 0");
+  check(non_negative(config.moving_translation) && non_negative(config.moving_rotation),
+        "OdometryGuardConfig: moving_translation and moving_rotation must be finite and >= 0");
+  check(positive(config.max_speed) && positive(config.max_turn_rate),
+        "OdometryGuardConfig: max_speed and max_turn_rate must be finite and > 0");
+  check(non_negative(config.jump_translation_slack) && non_negative(config.jump_rotation_slack),
+        "OdometryGuardConfig: jump slacks must be finite and >= 0");
+  check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
+  check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
+}
+
+const char* to_string(OdometryFault fault) {
+  switch (fault) {
+    case OdometryFault::kNone: return "none";
+    case OdometryFault::kStall: return "stall";
+    case OdometryFault::kCatchUp: return "catch-up";
+    case OdometryFault::kJump: return "jump";
+  }
+  return "unknown";
+}
+
+OdometryGuard::OdometryGuard(const OdometryGuardConfig& config) : config_(config) { validate(config_); }
+
+OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
+  OdometryCheck result;
+  if (!last_pose_) {
+    result.first = true;
+  } else {
+    result.increment = last_pose_->between(T_odom_robot);
+    result.dt = stamp - last_stamp_;
+    result.gap = result.dt > config_.gap;
+    stats_.gaps += result.gap ? 1 : 0;
+    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_);
+    // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
+    // integrated): the increment after it may still carry that motion.
+    lag_allowance_ = result.gap ? result.dt : 0.0;
+    ++stats_.checks;
+  }
+  last_pose_ = T_odom_robot;
+  last_stamp_ = stamp;
+  return result;
+}
+
+// The state machine of the header: stall (frozen after motion) until the pose moves, then one
+// catch-up; otherwise a jump when the increment is out of bounds.
+OdometryFault OdometryGuard::classify(const SE2& increment, double dt) {
+  const double translation = increment.translation().norm();
+  const double rotation = std::abs(increment.theta());
+  const bool frozen = translation <= config_.frozen_translation && rotation <= config_.frozen_rotation;
+  if (frozen) {
+    if (!stalled_ && !was_moving_) return OdometryFault::kNone;  // at rest: "no motion" is true
+    if (!stalled_) ++stats_.stalls;
+    stalled_ = true;
+    ++stats_.stalled_scans;
+    return OdometryFault::kStall;
+  }
+  if (stalled_) {
+    stalled_ = false;
+    was_moving_ = true;  // unknown: the next frozen increment is taken as a stall again
+    ++stats_.catch_ups;
+    return OdometryFault::kCatchUp;
+  }
+  if (exceeds_bounds(increment, dt)) {
+    ++stats_.jumps;
+    return OdometryFault::kJump;
+  }
+  was_moving_ = translation > config_.moving_translation || rotation > config_.moving_rotation;
+  return OdometryFault::kNone;
+}
+
+bool OdometryGuard::exceeds_bounds(const SE2& increment, double dt) const {
+  const double step = std::max(dt, config_.min_time_step);
+  return increment.translation().norm() > config_.max_speed * step + config_.jump_translation_slack ||
+         std::abs(increment.theta()) > config_.max_turn_rate * step + config_.jump_rotation_slack;
+}
+
+}  // namespace slam2d

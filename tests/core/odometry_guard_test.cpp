@@ -1,0 +1,123 @@
+// The odometry guard (core/odometry_guard.hpp): stalls, their catch-up, jumps and gaps are
+// found in hand-made odometry streams, and clean odometry is passed through untouched.
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry_guard.hpp"
+
+namespace slam2d {
+namespace {
+
+constexpr double kScanPeriod = 0.2;  // s
+
+// Poses of a robot driving straight along x at `speed` m/s, one per scan period.
+std::vector<SE2> straight_drive(int scans, double speed) {
+  std::vector<SE2> poses;
+  for (int k = 0; k < scans; ++k) poses.emplace_back(speed * kScanPeriod * k, 0.0, 0.0);
+  return poses;
+}
+
+std::vector<OdometryCheck> check_all(OdometryGuard& guard, const std::vector<SE2>& poses) {
+  std::vector<OdometryCheck> checks;
+  for (std::size_t k = 0; k < poses.size(); ++k) checks.push_back(guard.check(kScanPeriod * k, poses[k]));
+  return checks;
+}
+
+TEST(OdometryGuard, CleanDrivingIsTrustedAndIncrementsAreTheOdometrysOwn) {
+  OdometryGuard guard;
+  const std::vector<SE2> poses = straight_drive(50, 0.5);
+  const std::vector<OdometryCheck> checks = check_all(guard, poses);
+  EXPECT_TRUE(checks[0].first);
+  for (std::size_t k = 1; k < checks.size(); ++k) {
+    EXPECT_TRUE(checks[k].trusted()) << k;
+    EXPECT_EQ(checks[k].increment.vector(), poses[k - 1].between(poses[k]).vector());
+  }
+  EXPECT_EQ(guard.stats().untrusted(), 0u);
+  EXPECT_EQ(guard.stats().checks, 49u);
+}
+
+// The held-out log's fault: five scans with the same odometry pose while the robot drives on,
+// then the odometry catches up in one step.
+TEST(OdometryGuard, FrozenPoseAfterMotionIsAStallAndTheCatchUpIsNotTrusted) {
+  std::vector<SE2> poses = straight_drive(30, 0.5);
+  for (int k = 11; k <= 15; ++k) poses[k] = poses[10];  // frozen for five scans; scan 16 catches up
+  OdometryGuard guard;
+  const std::vector<OdometryCheck> checks = check_all(guard, poses);
+  for (int k = 1; k <= 10; ++k) EXPECT_TRUE(checks[k].trusted()) << k;
+  for (int k = 11; k <= 15; ++k) EXPECT_EQ(checks[k].fault, OdometryFault::kStall) << k;
+  EXPECT_EQ(checks[16].fault, OdometryFault::kCatchUp);
+  EXPECT_NEAR(checks[16].increment.x(), 0.6, 1e-12);  // six scans of motion in one increment
+  for (int k = 17; k < 30; ++k) EXPECT_TRUE(checks[k].trusted()) << k;
+  EXPECT_EQ(guard.stats().stalls, 1u);
+  EXPECT_EQ(guard.stats().stalled_scans, 5u);
+  EXPECT_EQ(guard.stats().catch_ups, 1u);
+}
+
+TEST(OdometryGuard, ARobotComingToRestIsNotAStall) {
+  // Slowing down through small increments, then standing: "no motion" is true.
+  std::vector<SE2> poses{SE2(0, 0, 0), SE2(0.05, 0, 0), SE2(0.08, 0, 0), SE2(0.09, 0, 0), SE2(0.095, 0, 0)};
+  for (int k = 0; k < 20; ++k) poses.push_back(poses.back());
+  poses.emplace_back(0.1, 0, 0);
+  OdometryGuard guard;
+  const std::vector<OdometryCheck> checks = check_all(guard, poses);
+  for (const OdometryCheck& check : checks) EXPECT_TRUE(check.trusted());
+  EXPECT_EQ(guard.stats().stalls, 0u);
+}
+
+TEST(OdometryGuard, AnIncrementBeyondTheRobotsSpeedIsAJump) {
+  std::vector<SE2> poses = straight_drive(20, 0.5);
+  for (int k = 10; k < 20; ++k) poses[k] = SE2(0.86, 0.0, 0.85) * poses[k];  // 0.86 m and 0.85 rad in one step
+  OdometryGuard guard;
+  const std::vector<OdometryCheck> checks = check_all(guard, poses);
+  EXPECT_EQ(checks[10].fault, OdometryFault::kJump);
+  for (int k = 11; k < 20; ++k) EXPECT_TRUE(checks[k].trusted()) << k;
+  EXPECT_EQ(guard.stats().jumps, 1u);
+  // The same step over a long enough time is plausible (a gap, not a jump).
+  OdometryGuard slow;
+  slow.check(0.0, SE2());
+  const OdometryCheck over_gap = slow.check(3.0, SE2(0.86, 0.0, 0.85));
+  EXPECT_TRUE(over_gap.trusted());
+  EXPECT_TRUE(over_gap.gap);
+  EXPECT_EQ(slow.stats().gaps, 1u);
+}
+
+// ACES at 613 s: after a 3 s gap the scan's odometry lags, and the next increment, 0.16 s later,
+// carries 1.06 rad of the turn made during the gap. It is bounded over the gap's time too.
+TEST(OdometryGuard, TheIncrementAfterAGapMayCarryTheGapsMotion) {
+  OdometryGuard guard;
+  guard.check(0.0, SE2());
+  EXPECT_TRUE(guard.check(3.0, SE2(0.0, 0.0, 0.39)).gap);
+  const OdometryCheck lagged = guard.check(3.16, SE2(0.38, 0.0, 1.45));
+  EXPECT_TRUE(lagged.trusted());
+  // Without the gap before it, the same increment is a jump.
+  OdometryGuard no_gap;
+  no_gap.check(0.0, SE2());
+  no_gap.check(0.2, SE2(0.0, 0.0, 0.39));
+  EXPECT_EQ(no_gap.check(0.36, SE2(0.38, 0.0, 1.45)).fault, OdometryFault::kJump);
+}
+
+TEST(OdometryGuard, ShortOrBackwardTimeStepsDoNotShrinkTheBound) {
+  OdometryGuard guard;
+  guard.check(10.0, SE2());
+  // 0.25 m with a stamp that stepped back: within max_speed * min_time_step + slack.
+  EXPECT_TRUE(guard.check(9.99, SE2(0.25, 0.0, 0.0)).trusted());
+}
+
+TEST(OdometryGuard, DisabledTrustsEverything) {
+  std::vector<SE2> poses = straight_drive(20, 0.5);
+  for (int k = 6; k <= 9; ++k) poses[k] = poses[5];
+  OdometryGuard guard(OdometryGuardConfig{.enabled = false});
+  for (const OdometryCheck& check : check_all(guard, poses)) EXPECT_TRUE(check.trusted());
+}
+
+TEST(OdometryGuard, RejectsInvalidConfigs) {
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_speed = 0.0}), Error);
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.min_time_step = -1.0}), Error);
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.jump_rotation_slack = -0.1}), Error);
+}
+
+}  // namespace
+}  // namespace slam2d
