@@ -8,8 +8,8 @@
 
 #include "json.hpp"
 #include "slam2d/core/occupancy_map.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/core/trajectory.hpp"
+#include "slam2d/io/carmen.hpp"
 
 namespace slam2d::cli {
 
