@@ -1,4 +1,6 @@
-// slam2d info FILE: what a CARMEN log, a map (YAML) or a pose graph (g2o/TORO) holds.
+// slam2d info FILE: what a CARMEN log, a map (YAML) or a pose graph (g2o/TORO) holds. For a log,
+// the FLASER/RLASER geometry the reader decided, per laser and beam count, with where each value
+// came from (docs/sensor_geometry.md).
 
 #include <fmt/core.h>
 
@@ -7,10 +9,13 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.hpp"
 #include "json.hpp"
 #include "progress.hpp"
+#include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
@@ -23,7 +28,7 @@ namespace {
 
 struct InfoOptions {
   std::string path;
-  std::optional<double> range_max;  // m, overrides the FLASER no-return threshold
+  CarmenReaderOptions geometry;  // FLASER/RLASER geometry overrides (sensor_options.hpp)
   bool json = false;
   bool quiet = false;
 };
@@ -32,11 +37,54 @@ bool ends_with_any(const std::string& path, std::initializer_list<const char*> s
   return std::any_of(suffixes.begin(), suffixes.end(), [&](const char* s) { return path.ends_with(s); });
 }
 
+// One decided geometry: values in degrees and metres, each with its source and reason.
+JsonObject geometry_json(const OldLaserGeometry& geometry) {
+  JsonObject json;
+  json.add("laser", geometry.rear ? "RLASER" : "FLASER").add("beams", geometry.beams).add("scans", geometry.scans);
+  json.add("first_line", geometry.first_line);
+  const double last_beam = geometry.angle_min.value +
+                           static_cast<double>(geometry.beams > 0 ? geometry.beams - 1 : 0) * geometry.angle_increment.value;
+  json.add("fov_deg", rad_to_deg(geometry.field_of_view.value));
+  json.add("angle_min_deg", rad_to_deg(geometry.angle_min.value));
+  json.add("angle_increment_deg", rad_to_deg(geometry.angle_increment.value));
+  json.add("last_beam_deg", rad_to_deg(last_beam)).add("range_max", geometry.range_max.value);
+  const std::pair<const char*, const GeometryValue*> values[] = {{"fov", &geometry.field_of_view},
+                                                                 {"angle_min", &geometry.angle_min},
+                                                                 {"angle_increment", &geometry.angle_increment},
+                                                                 {"range_max", &geometry.range_max}};
+  for (const auto& [name, value] : values) {
+    json.add(std::string(name) + "_source", to_string(value->source));
+    json.add(std::string(name) + "_reason", value->reason);
+  }
+  json.add("readings_at_range_max", geometry.readings_at_range_max);
+  json.add("readings_at_range_max_fraction",
+           geometry.readings > 0 ? static_cast<double>(geometry.readings_at_range_max) / static_cast<double>(geometry.readings)
+                                 : 0.0);
+  JsonObject warnings;
+  for (std::size_t k = 0; k < geometry.warnings.size(); ++k) warnings.add(std::to_string(k + 1), geometry.warnings[k]);
+  json.add("warnings", warnings);
+  return json;
+}
+
+// "front" and "rear", or "front_361" etc. when a laser has several geometries (beam counts, PARAM changes).
+JsonObject geometries_json(const std::vector<OldLaserGeometry>& geometries) {
+  JsonObject json;
+  for (const OldLaserGeometry& geometry : geometries) {
+    const std::size_t same_laser = static_cast<std::size_t>(std::count_if(
+        geometries.begin(), geometries.end(), [&](const OldLaserGeometry& g) { return g.rear == geometry.rear; }));
+    const std::size_t same_beams = static_cast<std::size_t>(std::count_if(
+        geometries.begin(), geometries.end(),
+        [&](const OldLaserGeometry& g) { return g.rear == geometry.rear && g.beams == geometry.beams; }));
+    std::string key = geometry.rear ? "rear" : "front";
+    if (same_laser > 1) key += "_" + std::to_string(geometry.beams);
+    if (same_beams > 1) key += "_from_line_" + std::to_string(geometry.first_line);
+    json.add(key, geometry_json(geometry));
+  }
+  return json;
+}
+
 JsonObject log_info(const InfoOptions& options) {
-  check(!options.range_max || *options.range_max > 0.0, "info: --range-max must be positive");
-  CarmenReaderOptions reader_options;
-  reader_options.range_max = options.range_max;
-  CarmenReader reader(options.path, reader_options);
+  CarmenReader reader(options.path, options.geometry);
   Progress progress("info", options.quiet);
   std::map<std::size_t, std::size_t> beam_counts;  // beams -> scans
   std::map<std::string, std::size_t> laser_types;
@@ -77,6 +125,7 @@ JsonObject log_info(const InfoOptions& options) {
   JsonObject skipped;
   for (const auto& [type, count] : stats.skipped_types) skipped.add(type, count);
   json.add("skipped_types", skipped);
+  json.add("geometry", geometries_json(stats.old_laser_geometries));
   return json;
 }
 
@@ -126,8 +175,7 @@ void add_info_command(CLI::App& app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* command = app.add_subcommand("info", "Summarise a CARMEN log, a map (.yaml) or a pose graph (.g2o, .graph)");
   command->add_option("file", options->path, "CARMEN log (plain or .gz), map YAML, or g2o/TORO graph")->required();
-  command->add_option("--range-max", options->range_max,
-                      "m: FLASER readings at or above are no-return (default: the log's PARAM, else 80)");
+  add_sensor_options(command, options->geometry);
   command->add_flag("--json", options->json, "Print a JSON summary");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_info(*options); });

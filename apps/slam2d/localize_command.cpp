@@ -18,6 +18,7 @@
 #include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
+#include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
@@ -45,7 +46,7 @@ struct LocalizeOptions {
   std::optional<double> kidnap_at;
   std::string kidnap_by = "5,0,90";
   std::string sensor = "likelihood-field";
-  std::optional<double> range_max;
+  CarmenReaderOptions geometry;  // FLASER geometry overrides (sensor_options.hpp)
   bool reverse_from_tv = false;
   std::string out;
   bool json = false;
@@ -124,9 +125,7 @@ void run_localize(const LocalizeOptions& options) {
     kidnap = Kidnap{.at = *options.kidnap_at, .by = SE2(by[0], by[1], deg_to_rad(by[2]))};
   }
   LocalizationSession session(*localizer, kidnap);
-  CarmenReaderOptions reader_options;
-  reader_options.range_max = options.range_max;
-  CarmenReader reader(options.log, reader_options);
+  CarmenReader reader(options.log, options.geometry);
   Progress progress("localize", options.quiet);
   ReverseOdometryRepair repair;
   while (auto message = reader.next()) {
@@ -146,6 +145,7 @@ void run_localize(const LocalizeOptions& options) {
     }
   }
   progress.finish();
+  print_geometry_warnings(reader);
   const LocalizationRunSummary& run = session.summary();
   check(run.scans > 0, reader.path() + ": no front-laser scans in the log");
   const std::filesystem::path out(options.out);
@@ -194,7 +194,7 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--kidnap-at", options->kidnap_at, "s after the first scan: corrupt the odometry once (kidnap test)");
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();
-  command->add_option("--range-max", options->range_max, "m, FLASER readings at or beyond are no-return (default: PARAM, else 80)");
+  add_sensor_options(command, options->geometry);
   command->add_flag("--reverse-from-tv", options->reverse_from_tv,
                     "Mirror scan-to-scan odometry steps that move forward while ODOM tv < 0 (FR079 integrates reversing as forward)");
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "map_job.hpp"
+#include "sensor_options.hpp"
 
 namespace slam2d::cli {
 
@@ -18,8 +19,7 @@ void add_map_command(CLI::App& app) {
       ->check(CLI::IsMember(map_methods()))
       ->capture_default_str();
   command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
-  command->add_option("--range-max", options->range_max,
-                      "m: FLASER readings at or above are no-return (default: the log's PARAM, else 80)");
+  add_sensor_options(command, options->geometry);
   command->add_flag("--no-odometry", options->no_odometry, "hector, graph: ignore the log's odometry (initial guess: the last pose or constant velocity)");
   command->add_option("--levels", options->levels, "hector: map pyramid levels")
       ->check(CLI::Range(1, 16))

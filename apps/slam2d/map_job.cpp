@@ -8,6 +8,7 @@
 #include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
+#include "sensor_options.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/grid/render.hpp"
@@ -39,9 +40,7 @@ struct MappingRun {
 // with the progress line; fills every field of the run but the map.
 template <typename AddScan>
 MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
-  CarmenReaderOptions reader_options;
-  reader_options.range_max = options.range_max;
-  CarmenReader reader(options.log, reader_options);
+  CarmenReader reader(options.log, options.geometry);
   Progress progress("map", options.quiet);
   MappingRun run;
   while (auto message = reader.next()) {
@@ -57,6 +56,7 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
     }
   }
   progress.finish();
+  print_geometry_warnings(reader);
   check(!run.trajectory.empty(), reader.path() + ": no laser scans in the log");
   run.backwards_timestamps = reader.stats().backwards_laser_timestamps;
   run.skipped_lines = reader.stats().skipped_lines;
@@ -179,7 +179,6 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   check(options.particles >= 1 && options.particles <= 10000, "map: --particles must be in [1, 10000]");
   check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
   check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
-  check(!options.range_max || *options.range_max > 0.0, "map: --range-max must be positive");
   const RunClock clock;
   MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();

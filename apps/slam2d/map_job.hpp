@@ -9,6 +9,7 @@
 #include "json.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/trajectory.hpp"
+#include "slam2d/io/carmen.hpp"
 
 namespace slam2d::cli {
 
@@ -23,7 +24,7 @@ struct MapJobOptions {
   std::uint64_t seed = 1;           // rbpf: seed of every random draw (same log + seed, same result)
   int threads = 0;                  // rbpf: threads for the particles, in [0, 256] (0: all hardware threads); same result
   bool quiet = false;               // no progress line
-  std::optional<double> range_max;  // m; FLASER/RLASER readings at or above are no-return (default: PARAM, else 80)
+  CarmenReaderOptions geometry;     // FLASER/RLASER geometry overrides (sensor_options.hpp); unset: PARAM, else convention
 };
 
 struct MapJobResult {

@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include "json.hpp"
 #include "progress.hpp"
+#include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/rng.hpp"
@@ -38,6 +39,7 @@ struct MatchBenchOptions {
   double success_trans = 0.1;       // m, a match within this and success_rot_deg counts as a success
   double success_rot_deg = 2.0;     // deg
   std::uint64_t seed = 1;
+  CarmenReaderOptions geometry;       // FLASER geometry overrides (sensor_options.hpp)
   bool json = false;
   bool quiet = false;
 };
@@ -58,7 +60,7 @@ std::vector<ReferencedScan> read_scans(const MatchBenchOptions& options) {
   std::optional<Trajectory> reference;
   if (!options.reference.empty()) reference = read_trajectory(options.reference);
   const std::optional<StampIndex> index = reference ? std::optional<StampIndex>(StampIndex(*reference)) : std::nullopt;
-  CarmenReader reader(options.log);
+  CarmenReader reader(options.log, options.geometry);
   std::vector<ReferencedScan> scans;
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -73,6 +75,7 @@ std::vector<ReferencedScan> read_scans(const MatchBenchOptions& options) {
     }
     scans.push_back({to_point_cloud(laser->scan, ScanFrame::kSensor).cloud, T_world_robot * laser->scan.T_robot_sensor});
   }
+  print_geometry_warnings(reader);
   check(scans.size() >= 2, options.log + ": fewer than two front-laser scans with a reference pose");
   return scans;
 }
@@ -219,6 +222,7 @@ void add_match_bench_command(CLI::App& app) {
   command->add_option("--success-trans", options->success_trans, "m, success threshold")->capture_default_str();
   command->add_option("--success-rot", options->success_rot_deg, "deg, success threshold")->capture_default_str();
   command->add_option("--seed", options->seed, "Seed of the pair choice and perturbations")->capture_default_str();
+  add_sensor_options(command, options->geometry);
   command->add_flag("--json", options->json, "Print the results as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_match_bench(*options); });

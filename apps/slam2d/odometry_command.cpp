@@ -13,6 +13,7 @@
 #include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
+#include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
@@ -31,7 +32,7 @@ struct OdometryOptions {
   std::string out;
   std::optional<double> keyframe;            // m; 0: match every scan against the previous one
   std::optional<double> keyframe_angle_deg;  // deg
-  std::optional<double> range_max;           // m
+  CarmenReaderOptions geometry;                // FLASER geometry overrides (sensor_options.hpp)
   bool no_odometry = false;
   bool json = false;
   bool quiet = false;
@@ -50,7 +51,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
     if (*options.keyframe == 0.0) config.keyframe_angle = 0.0;
   }
   if (options.keyframe_angle_deg) config.keyframe_angle = deg_to_rad(*options.keyframe_angle_deg);
-  if (options.range_max) config.max_range = *options.range_max;
+  if (options.geometry.range_max) config.max_range = *options.geometry.range_max;
   validate(config);
   return config;
 }
@@ -58,7 +59,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
 void run_odometry(const OdometryOptions& options) {
   ScanOdometry odometry(configured_matcher(options), odometry_config(options));
   const RunClock clock;
-  CarmenReader reader(options.log);
+  CarmenReader reader(options.log, options.geometry);
   Progress progress("odometry", options.quiet);
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -70,6 +71,7 @@ void run_odometry(const OdometryOptions& options) {
     }
   }
   progress.finish();
+  print_geometry_warnings(reader);
   const double cpu = clock.cpu_seconds();
   const Trajectory& trajectory = odometry.trajectory();
   check(!trajectory.empty(), reader.path() + ": no front-laser scans in the log");
@@ -105,7 +107,9 @@ void add_odometry_command(CLI::App& app) {
   command->add_option("--keyframe", options->keyframe,
                       "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
   command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");
-  command->add_option("--range-max", options->range_max, "m, readings at or beyond are dropped (default 30)");
+  add_sensor_options(command, options->geometry,
+                     "m: readings at or above are dropped (default: 30 for matching, and the reader's no-return "
+                     "threshold: the log's PARAM, else 80)");
   command->add_flag("--no-odometry", options->no_odometry, "Ignore the log's odometry (guess: constant velocity)");
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");

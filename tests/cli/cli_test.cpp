@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "slam2d/io/trajectory_io.hpp"
@@ -178,6 +179,116 @@ INSTANTIATE_TEST_SUITE_P(
         BadLog{"negative.clf", good_prefix() + flaser_line(180, "-1.0", 1.1), 4, "negative"},
         BadLog{"garbage.clf", good_prefix() + "ODOM 1 2 x 0 0 0 1.2 host 1.2\n", 4, "ODOM"}),
     [](const auto& info) { return std::string(info.param.name).substr(0, std::string(info.param.name).find('.')); });
+
+// ------------------------------------------------------------------------------------------------
+// Sensor geometry (docs/sensor_geometry.md): what `info` reports, and the overrides every command
+// that reads a log shares.
+
+std::string geometry_fixture(const std::string& name) { return test::fixture_path("carmen/" + name); }
+
+// The string value of `key` (the first one in the output), or "" when absent.
+std::string json_string_value(const std::string& json, const std::string& key) {
+  const std::string quoted = "\"" + key + "\": \"";
+  const auto at = json.find(quoted);
+  if (at == std::string::npos) return "";
+  const auto begin = at + quoted.size();
+  return json.substr(begin, json.find('"', begin) - begin);
+}
+
+TEST(CliGeometry, InfoReportsAFieldOfViewInRadiansAs180Degrees) {
+  // PARAM laser_front_laser_fov 3.14159 (radians) next to laser_front_laser_resolution 0.5 (degrees), 361 beams.
+  const std::string log = geometry_fixture("geometry_fov_radians.log");
+  const CommandResult json = run_command(slam2d("info --json " + log));
+  ASSERT_EQ(json.exit_code, 0) << json.errors;
+  EXPECT_NEAR(*json_number(json.output, "fov_deg"), 180.0, 1e-9);
+  EXPECT_EQ(json_number(json.output, "beams"), 361.0);
+  EXPECT_NEAR(*json_number(json.output, "angle_min_deg"), -90.0, 1e-9);
+  EXPECT_NEAR(*json_number(json.output, "angle_increment_deg"), 0.5, 1e-9);
+  EXPECT_NEAR(*json_number(json.output, "last_beam_deg"), 90.0, 1e-9);
+  EXPECT_EQ(json_number(json.output, "range_max"), 80.0);
+  EXPECT_EQ(json_string_value(json.output, "fov_source"), "PARAM (unit guessed)");
+  EXPECT_EQ(json_string_value(json.output, "angle_increment_source"), "PARAM");
+  EXPECT_NE(json_string_value(json.output, "fov_reason").find("laser_front_laser_fov 3.14159 (line 2) read as radians"),
+            std::string::npos)
+      << json.output;
+  // The text form says the same for people.
+  const CommandResult text = run_command(slam2d("info " + log));
+  ASSERT_EQ(text.exit_code, 0) << text.errors;
+  EXPECT_NE(text.output.find("fov_deg: 180"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("read as radians: 361 beams x 0.5 deg"), std::string::npos) << text.output;
+}
+
+TEST(CliGeometry, OverridesOnTheCommandLineBeatTheParams) {
+  const std::string log = geometry_fixture("geometry_fov_radians.log");
+  const CommandResult result =
+      run_command(slam2d("info --json --fov 90 --angle-increment 0.25 --angle-min -30 --range-max 7.5 " + log));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_NEAR(*json_number(result.output, "fov_deg"), 90.0, 1e-9);
+  EXPECT_NEAR(*json_number(result.output, "angle_min_deg"), -30.0, 1e-9);
+  EXPECT_NEAR(*json_number(result.output, "angle_increment_deg"), 0.25, 1e-9);
+  EXPECT_NEAR(*json_number(result.output, "last_beam_deg"), 60.0, 1e-9);
+  EXPECT_EQ(json_number(result.output, "range_max"), 7.5);
+  for (const char* key : {"fov_source", "angle_min_source", "angle_increment_source", "range_max_source"}) {
+    EXPECT_EQ(json_string_value(result.output, key), "override") << key;
+  }
+}
+
+TEST(CliGeometry, AContradictionIsAnErrorAtTheParamLineThatOverridesResolve) {
+  const std::string log = geometry_fixture("bad_geometry_contradiction.log");
+  const CommandResult bad = run_command(slam2d("info " + log));
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.errors.rfind(log + ":3: ", 0), 0u) << bad.errors;
+  const CommandResult fixed = run_command(slam2d("info --json --fov 45 --angle-increment 0.25 " + log));
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.errors;
+  EXPECT_NEAR(*json_number(fixed.output, "angle_min_deg"), -22.5, 1e-9);
+}
+
+TEST(CliGeometry, MapPrintsTheGeometryWarningsOnStderr) {
+  // fov 180 with a 1 deg resolution over 361 beams: the increment falls back to the convention.
+  const std::string log = geometry_fixture("geometry_fallback.log");
+  TempDir out;
+  const CommandResult result = run_command(slam2d("map --quiet --out " + out.path().string() + " " + log));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_EQ(result.errors.rfind(log + ":4: warning: FLASER geometry, 361 beams: ", 0), 0u) << result.errors;
+  EXPECT_NE(result.errors.find("laser_front_laser_resolution 1 (line 3)"), std::string::npos) << result.errors;
+  // A consistent log warns of nothing.
+  TempDir clean;
+  const std::string good = geometry_fixture("geometry_fov_radians.log");
+  EXPECT_EQ(run_command(slam2d("map --quiet --out " + clean.path().string() + " " + good)).errors, "");
+}
+
+TEST(CliGeometry, TheMisspelledResolutionIsReportedAsAnAlias) {
+  const CommandResult result = run_command(slam2d("info --json " + geometry_fixture("geometry_alias.log")));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_NE(json_string_value(result.output, "angle_increment_reason")
+                .find("laser_frontlaser_resolution 1 (line 3, taken as laser_front_laser_resolution)"),
+            std::string::npos)
+      << result.output;
+}
+
+TEST(CliGeometry, EveryCommandThatReadsALogTakesTheSameCheckedOverrides) {
+  for (const char* command : {"info", "map", "localize", "odometry", "match-bench"}) {
+    SCOPED_TRACE(command);
+    const CommandResult help = run_command(slam2d(std::string(command) + " --help"));
+    for (const char* option : {"--fov", "--angle-min", "--angle-increment", "--range-max"}) {
+      EXPECT_NE(help.output.find(option), std::string::npos) << option;
+    }
+    for (const char* bad : {"--fov 0", "--fov 400", "--angle-increment -1", "--range-max 0", "--fov nan"}) {
+      const CommandResult refused = run_command(slam2d(std::string(command) + " " + bad + " x.clf"));
+      EXPECT_NE(refused.exit_code, 0) << bad;
+      EXPECT_NE(refused.errors.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos)
+          << bad << ": " << refused.errors;
+    }
+  }
+  // The map follows the overrides: a 90 deg field of view over 361 beams marks other cells.
+  TempDir plain, narrow;
+  const std::string log = geometry_fixture("geometry_fov_radians.log");
+  ASSERT_EQ(run_command(slam2d("map --quiet --out " + plain.path().string() + " " + log)).exit_code, 0);
+  ASSERT_EQ(run_command(slam2d("map --quiet --fov 90 --out " + narrow.path().string() + " " + log)).exit_code, 0);
+  std::ifstream a(plain.file("map.pgm"), std::ios::binary), b(narrow.file("map.pgm"), std::ios::binary);
+  const std::string pa((std::istreambuf_iterator<char>(a)), {}), pb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_NE(pa, pb);
+}
 
 TEST(CliErrors, MissingFileIsNamed) {
   TempDir dir;

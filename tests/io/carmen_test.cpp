@@ -142,7 +142,7 @@ TEST(CarmenReader, TruePoses) {
 TEST(CarmenReader, ParamLinesOverrideGeometryForTheScansThatFollow) {
   const ReadResult log = read_log(carmen_fixture("params.log"));
   ASSERT_EQ(log.messages.size(), 4u);
-  EXPECT_EQ(log.stats.param_messages, 7u);
+  EXPECT_EQ(log.stats.param_messages, 8u);
   // Before any PARAM: the convention.
   const LaserMessage& plain = laser(log, 0);
   EXPECT_DOUBLE_EQ(plain.scan.angle_increment, kPi / 180);
@@ -160,10 +160,27 @@ TEST(CarmenReader, ParamLinesOverrideGeometryForTheScansThatFollow) {
   const LaserMessage& even = laser(log, 2);
   EXPECT_NEAR(even.scan.angle_increment, deg_to_rad(1), 1e-15);
   EXPECT_NEAR(even.scan.angle_max(), deg_to_rad(4), 1e-14);
-  // laser_front_laser_resolution 0.5 (deg) sets the step.
-  const LaserMessage& fine = laser(log, 3);
-  EXPECT_NEAR(fine.scan.angle_increment, deg_to_rad(0.5), 1e-15);
-  EXPECT_NEAR(fine.scan.angle_min, deg_to_rad(-5), 1e-15);
+  // Later PARAM lines (fov 20, resolution 2 deg) decide again for the 11 beams: -10 .. +10 deg.
+  const LaserMessage& wide = laser(log, 3);
+  EXPECT_NEAR(wide.scan.angle_increment, deg_to_rad(2), 1e-15);
+  EXPECT_NEAR(wide.scan.angle_min, deg_to_rad(-10), 1e-15);
+  // One geometry per laser, beam count and PARAM set, in the order decided.
+  const std::vector<OldLaserGeometry>& geometries = log.stats.old_laser_geometries;
+  ASSERT_EQ(geometries.size(), 4u);
+  const std::size_t beams[] = {180, 11, 10, 11};
+  const std::size_t lines[] = {2, 9, 10, 13};
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(geometries[k].beams, beams[k]);
+    EXPECT_EQ(geometries[k].first_line, lines[k]);
+    EXPECT_EQ(geometries[k].scans, 1u);
+    EXPECT_FALSE(geometries[k].rear);
+    EXPECT_TRUE(geometries[k].warnings.empty()) << geometries[k].warnings.front();
+  }
+  EXPECT_EQ(geometries[0].field_of_view.source, GeometrySource::kConvention);
+  EXPECT_EQ(geometries[1].field_of_view.source, GeometrySource::kParam);
+  EXPECT_EQ(geometries[1].angle_increment.source, GeometrySource::kDerived);
+  EXPECT_EQ(geometries[1].range_max.source, GeometrySource::kParam);
+  EXPECT_EQ(geometries[3].angle_increment.source, GeometrySource::kParam);
 }
 
 TEST(CarmenReader, OptionsOverrideParamLinesAndDefaults) {
@@ -176,7 +193,13 @@ TEST(CarmenReader, OptionsOverrideParamLinesAndDefaults) {
   EXPECT_DOUBLE_EQ(laser(log, 0).scan.angle_increment, kPi / 2 / 180);
   EXPECT_DOUBLE_EQ(laser(log, 0).scan.angle_min, -kPi / 4);
   EXPECT_DOUBLE_EQ(laser(log, 1).scan.angle_increment, kPi / 2 / 10);  // option beats PARAM fov
-  EXPECT_NEAR(laser(log, 3).scan.angle_increment, deg_to_rad(0.5), 1e-15);  // PARAM resolution
+  // The PARAM resolution (2 deg) does not fit a 90 deg field of view over 11 beams: dropped, with a warning.
+  EXPECT_DOUBLE_EQ(laser(log, 3).scan.angle_increment, kPi / 2 / 10);
+  const OldLaserGeometry& late = log.stats.old_laser_geometries.at(3);
+  EXPECT_EQ(late.field_of_view.source, GeometrySource::kOverride);
+  EXPECT_EQ(late.angle_increment.source, GeometrySource::kDerived);
+  ASSERT_EQ(late.warnings.size(), 1u);
+  EXPECT_NE(late.warnings[0].find("laser_front_laser_resolution 2 (line 12)"), std::string::npos) << late.warnings[0];
   for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_EQ(laser(log, i).scan.range_max, 12.5);
     EXPECT_EQ(laser(log, i).scan.range_min, 0.1);
@@ -191,6 +214,238 @@ TEST(CarmenReader, OptionsOverrideParamLinesAndDefaults) {
   for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_EQ(laser(fixed, i).scan.angle_increment, 0.01);
     EXPECT_EQ(laser(fixed, i).scan.angle_min, -0.3);
+  }
+}
+
+// ------------------------------------------------------------------------------------------------
+// The geometry check (docs/sensor_geometry.md).
+
+// The one front geometry of a log read with `options`.
+OldLaserGeometry front_geometry_of(const std::string& fixture, CarmenReaderOptions options = {}) {
+  const ReadResult log = read_log(carmen_fixture(fixture), options);
+  const OldLaserGeometry* geometry = log.stats.front_geometry();
+  if (geometry == nullptr) throw Error(fixture + ": no front geometry");
+  return *geometry;
+}
+
+void expect_angles_deg(const LaserScan& scan, double first_deg, double increment_deg, double last_deg) {
+  EXPECT_NEAR(scan.angle_min, deg_to_rad(first_deg), 1e-12);
+  EXPECT_NEAR(scan.angle_increment, deg_to_rad(increment_deg), 1e-12);
+  EXPECT_NEAR(scan.angle_max(), deg_to_rad(last_deg), 1e-12);
+}
+
+TEST(CarmenGeometry, FieldOfViewInRadiansNextToAResolutionInDegreesIsRead) {
+  // PARAM laser_front_laser_fov 3.14159 and laser_front_laser_resolution 0.5 with 361 beams:
+  // in degrees 361 x 0.5 deg is not 3.14 deg; read as radians it is 180 deg. Before the check the
+  // reader took 3.14 deg, starting the scan at -1.57 deg and turning every beam by about 88 deg.
+  const ReadResult log = read_log(carmen_fixture("geometry_fov_radians.log"));
+  ASSERT_EQ(log.messages.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const LaserMessage& m = laser(log, i);
+    expect_fixture_ranges(m.scan, 361);
+    expect_angles_deg(m.scan, -90.0, 0.5, 90.0);
+    EXPECT_EQ(m.scan.angle_min, -kPi / 2);  // 3.14159 is pi as printed: exactly -pi/2
+    EXPECT_EQ(m.field_of_view, kPi);
+  }
+  ASSERT_EQ(log.stats.old_laser_geometries.size(), 1u);  // decided once, at the first line
+  const OldLaserGeometry& g = log.stats.old_laser_geometries[0];
+  EXPECT_EQ(g.beams, 361u);
+  EXPECT_EQ(g.scans, 2u);
+  EXPECT_EQ(g.first_line, 4u);
+  EXPECT_EQ(g.field_of_view.source, GeometrySource::kParamUnitGuess);
+  EXPECT_NE(g.field_of_view.reason.find("laser_front_laser_fov 3.14159 (line 2) read as radians: 361 beams x 0.5 deg"),
+            std::string::npos)
+      << g.field_of_view.reason;
+  EXPECT_EQ(g.angle_increment.source, GeometrySource::kParam);
+  EXPECT_EQ(g.angle_min.source, GeometrySource::kDerived);
+  EXPECT_EQ(g.range_max.source, GeometrySource::kConvention);
+  EXPECT_TRUE(g.warnings.empty());
+  EXPECT_STREQ(to_string(g.field_of_view.source), "PARAM (unit guessed)");
+}
+
+TEST(CarmenGeometry, FieldOfViewAndResolutionInDegreesAreKept) {
+  const ReadResult log = read_log(carmen_fixture("geometry_fov_degrees.log"));
+  ASSERT_EQ(log.messages.size(), 2u);
+  expect_angles_deg(laser(log, 0).scan, -90.0, 0.5, 90.0);   // 361 beams: both ends
+  expect_angles_deg(laser(log, 1).scan, -90.0, 0.5, 89.5);   // 360 beams: n steps
+  ASSERT_EQ(log.stats.old_laser_geometries.size(), 2u);  // one per beam count
+  for (const OldLaserGeometry& g : log.stats.old_laser_geometries) {
+    EXPECT_EQ(g.field_of_view.source, GeometrySource::kParam);
+    EXPECT_EQ(g.angle_increment.source, GeometrySource::kParam);
+    EXPECT_NE(g.field_of_view.reason.find("in degrees"), std::string::npos) << g.field_of_view.reason;
+    EXPECT_TRUE(g.warnings.empty());
+  }
+}
+
+TEST(CarmenGeometry, A100DegreeScannerWith101BeamsIsCentred) {
+  const ReadResult log = read_log(carmen_fixture("geometry_fov100.log"));
+  ASSERT_EQ(log.messages.size(), 1u);
+  expect_angles_deg(laser(log, 0).scan, -50.0, 1.0, 50.0);
+  EXPECT_NEAR(laser(log, 0).field_of_view, deg_to_rad(100), 1e-15);
+  EXPECT_EQ(laser(log, 0).scan.range_max, 5.0);
+  const OldLaserGeometry& g = log.stats.old_laser_geometries.at(0);
+  EXPECT_EQ(g.range_max.source, GeometrySource::kParam);
+  // Ranges 0.5 + (i mod 10): 5.5 .. 9.5 are at or above the 5 m maximum, 5 of every 10.
+  EXPECT_EQ(g.readings, 101u);
+  EXPECT_EQ(g.readings_at_range_max, 50u);
+}
+
+TEST(CarmenGeometry, ContradictionNoUnitExplainsIsAParseErrorAtTheParamLine) {
+  const std::string path = carmen_fixture("bad_geometry_contradiction.log");
+  CarmenReader reader(path);
+  ASSERT_TRUE(reader.next());  // the ODOM line
+  try {
+    reader.next();
+    FAIL() << "no exception";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), 3u);  // laser_front_laser_fov
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path + ":3: ", 0), 0u) << what;
+    for (const char* part : {"laser_front_laser_fov 100 (line 3)", "laser_front_laser_resolution 0.25 (line 4)",
+                             "181 beams", "180 deg", "override"}) {
+      EXPECT_NE(what.find(part), std::string::npos) << part << " in " << what;
+    }
+  }
+  // The overrides make the same log readable.
+  CarmenReaderOptions options;
+  options.field_of_view = deg_to_rad(45);
+  options.angle_increment = deg_to_rad(0.25);
+  const ReadResult log = read_log(path, options);
+  ASSERT_EQ(log.messages.size(), 2u);
+  expect_angles_deg(laser(log, 1).scan, -22.5, 0.25, 22.5);
+  EXPECT_TRUE(log.stats.old_laser_geometries.at(0).warnings.empty());
+}
+
+TEST(CarmenGeometry, ContradictionTheConventionExplainsFallsBackWithAWarning) {
+  // fov 180 fits 361 beams; a resolution of 1 deg does not (361 deg): the increment falls back
+  // to the convention, 180 deg over 360 steps.
+  const OldLaserGeometry g = front_geometry_of("geometry_fallback.log");
+  EXPECT_NEAR(g.field_of_view.value, kPi, 1e-15);
+  EXPECT_NEAR(g.angle_increment.value, deg_to_rad(0.5), 1e-15);
+  EXPECT_NEAR(g.angle_min.value, -kPi / 2, 1e-15);
+  EXPECT_EQ(g.angle_increment.source, GeometrySource::kDerived);
+  ASSERT_EQ(g.warnings.size(), 1u);
+  EXPECT_NE(g.warnings[0].find("laser_front_laser_resolution 1 (line 3)"), std::string::npos) << g.warnings[0];
+  EXPECT_NE(g.warnings[0].find("convention"), std::string::npos) << g.warnings[0];
+}
+
+TEST(CarmenGeometry, OverridesBeatTheParamLines) {
+  CarmenReaderOptions options;
+  options.field_of_view = deg_to_rad(90);
+  options.angle_increment = deg_to_rad(0.25);
+  options.angle_min = deg_to_rad(-30);
+  options.range_max = 7.5;
+  const ReadResult log = read_log(carmen_fixture("geometry_fov_radians.log"), options);
+  expect_angles_deg(laser(log, 0).scan, -30.0, 0.25, 60.0);
+  EXPECT_EQ(laser(log, 0).scan.range_max, 7.5);
+  EXPECT_NEAR(laser(log, 0).field_of_view, deg_to_rad(90), 1e-15);
+  const OldLaserGeometry& g = log.stats.old_laser_geometries.at(0);
+  for (const GeometryValue* v : {&g.field_of_view, &g.angle_min, &g.angle_increment, &g.range_max}) {
+    EXPECT_EQ(v->source, GeometrySource::kOverride) << v->reason;
+  }
+  EXPECT_TRUE(g.warnings.empty());  // 361 x 0.25 deg fits 90 deg
+  // A field of view override alone: the PARAM resolution (0.5 deg) fits 361 beams over 180 deg,
+  // not 120 deg, so it is dropped with a warning and the increment is 120 deg / 360.
+  CarmenReaderOptions fov_only;
+  fov_only.field_of_view = deg_to_rad(120);
+  const OldLaserGeometry h = front_geometry_of("geometry_fov_radians.log", fov_only);
+  EXPECT_NEAR(h.angle_increment.value, deg_to_rad(120.0 / 360.0), 1e-15);
+  EXPECT_NEAR(h.angle_min.value, deg_to_rad(-60), 1e-15);
+  ASSERT_EQ(h.warnings.size(), 1u);
+  EXPECT_NE(h.warnings[0].find("dropped"), std::string::npos) << h.warnings[0];
+  // An increment override alone, against the radians fov: 361 x 0.5 deg fits 3.14159 read as radians.
+  CarmenReaderOptions increment_only;
+  increment_only.angle_increment = deg_to_rad(0.5);
+  EXPECT_EQ(front_geometry_of("geometry_fov_radians.log", increment_only).field_of_view.source,
+            GeometrySource::kParamUnitGuess);
+}
+
+TEST(CarmenGeometry, MisspelledFrontlaserResolutionIsAnAlias) {
+  // FHW's "PARAM laser_frontlaser_resolution 1 0.0 nohost 0": taken as laser_front_laser_resolution,
+  // and checked like it (180 beams x 1 deg fit the convention's 180 deg).
+  const OldLaserGeometry g = front_geometry_of("geometry_alias.log");
+  EXPECT_NEAR(g.angle_increment.value, deg_to_rad(1), 1e-15);
+  EXPECT_EQ(g.angle_increment.source, GeometrySource::kParam);
+  EXPECT_NE(g.angle_increment.reason.find("laser_frontlaser_resolution 1 (line 3, taken as laser_front_laser_resolution)"),
+            std::string::npos)
+      << g.angle_increment.reason;
+  EXPECT_EQ(g.field_of_view.source, GeometrySource::kConvention);
+  EXPECT_NEAR(g.angle_min.value, -kPi / 2, 1e-15);
+}
+
+// Logs written on the fly: PARAM lines, then one FLASER of `beams`.
+class CarmenGeometryCases : public ::testing::Test {
+ protected:
+  OldLaserGeometry decide(const std::vector<std::string>& params, std::size_t beams) {
+    const std::string path = dir_.file("case" + std::to_string(++count_) + ".log");
+    std::ofstream out(path);
+    for (const std::string& param : params) out << "PARAM " << param << " nohost 0\n";
+    out << "FLASER " << beams;
+    for (std::size_t i = 0; i < beams; ++i) out << " 1";
+    out << " 0 0 0 0 0 0 1 host 1\n";
+    out.close();
+    const ReadResult log = read_log(path);
+    return log.stats.old_laser_geometries.at(0);
+  }
+  test::TempDir dir_;
+  int count_ = 0;
+};
+
+TEST_F(CarmenGeometryCases, ResolutionInRadiansIsGuessedOnlyWhenDegreesDoNotFit) {
+  // 0.00872665 rad = 0.5 deg: 361 beams fit 180 deg only in radians.
+  const OldLaserGeometry radians = decide({"laser_front_laser_resolution 0.00872665"}, 361);
+  EXPECT_EQ(radians.angle_increment.source, GeometrySource::kParamUnitGuess);
+  EXPECT_NEAR(radians.angle_increment.value, 0.00872665, 1e-15);
+  EXPECT_NEAR(radians.field_of_view.value, kPi, 1e-15);
+  // Both in radians fit together, as both in degrees do (a 3.14 deg scanner): the convention's 180 deg decides.
+  const OldLaserGeometry both = decide({"laser_front_laser_fov 3.14159", "laser_front_laser_resolution 0.00872665"}, 361);
+  EXPECT_EQ(both.field_of_view.source, GeometrySource::kParamUnitGuess);
+  EXPECT_EQ(both.angle_increment.source, GeometrySource::kParamUnitGuess);
+  EXPECT_NEAR(both.angle_min.value, -kPi / 2, 1e-5);
+  // A field of view alone that is pi read as radians.
+  const OldLaserGeometry fov_alone = decide({"laser_front_laser_fov 3.14159"}, 181);
+  EXPECT_EQ(fov_alone.field_of_view.source, GeometrySource::kParamUnitGuess);
+  EXPECT_EQ(fov_alone.field_of_view.value, kPi);
+  EXPECT_NEAR(fov_alone.angle_increment.value, deg_to_rad(1), 1e-15);
+  // Small values that fit in degrees stay degrees (a 5 deg scanner), with a warning as radians fit too.
+  const OldLaserGeometry narrow = decide({"laser_front_laser_fov 5", "laser_front_laser_resolution 0.5"}, 11);
+  EXPECT_EQ(narrow.field_of_view.source, GeometrySource::kParam);
+  EXPECT_NEAR(narrow.field_of_view.value, deg_to_rad(5), 1e-15);
+  EXPECT_EQ(narrow.warnings.size(), 1u);
+  // A field of view of 3 alone, which is not 180 deg in radians: degrees, with a warning.
+  const OldLaserGeometry three = decide({"laser_front_laser_fov 3"}, 181);
+  EXPECT_EQ(three.field_of_view.source, GeometrySource::kParam);
+  EXPECT_NEAR(three.field_of_view.value, deg_to_rad(3), 1e-15);
+  EXPECT_EQ(three.warnings.size(), 1u);
+}
+
+TEST_F(CarmenGeometryCases, AResolutionThatDoesNotFit180DegreesSpansItsBeams) {
+  // A 270 deg scanner (0.25 deg, 1081 beams) written as FLASER with its resolution only.
+  const OldLaserGeometry wide = decide({"laser_front_laser_resolution 0.25"}, 1081);
+  EXPECT_NEAR(wide.field_of_view.value, deg_to_rad(270), 1e-12);
+  EXPECT_NEAR(wide.angle_min.value, deg_to_rad(-135), 1e-12);
+  EXPECT_EQ(wide.field_of_view.source, GeometrySource::kDerived);
+  EXPECT_EQ(wide.warnings.size(), 1u);  // not the convention's 180 deg
+  // One that spans more than a full turn in any unit is an error at its line.
+  EXPECT_THROW(decide({"laser_front_laser_resolution 3"}, 361), ParseError);
+}
+
+TEST_F(CarmenGeometryCases, AFieldOfViewOfMoreThanAFullTurnIsRefusedAtItsLine) {
+  EXPECT_THROW(decide({"laser_front_laser_fov 400"}, 180), ParseError);
+  EXPECT_NO_THROW(decide({"laser_front_laser_fov 360", "laser_front_laser_resolution 1"}, 360));
+}
+
+TEST(CarmenGeometry, OptionsOutOfRangeAreRefused) {
+  const std::string path = carmen_fixture("flaser_beams.log");
+  for (auto set : std::vector<void (*)(CarmenReaderOptions&)>{
+           [](CarmenReaderOptions& o) { o.field_of_view = 0.0; },
+           [](CarmenReaderOptions& o) { o.field_of_view = 7.0; },
+           [](CarmenReaderOptions& o) { o.angle_increment = -0.01; },
+           [](CarmenReaderOptions& o) { o.angle_min = std::numeric_limits<double>::quiet_NaN(); },
+           [](CarmenReaderOptions& o) { o.range_max = 0.0; }}) {
+    CarmenReaderOptions options;
+    set(options);
+    EXPECT_THROW({ CarmenReader reader(path, options); }, Error);
   }
 }
 
@@ -405,6 +660,7 @@ INSTANTIATE_TEST_SUITE_P(
         MalformedCase{"bad_robotlaser_truncated.log", 3, "ROBOTLASER1: expected 5 ranges"},
         MalformedCase{"bad_param_value.log", 3, "PARAM: robot_front_laser_max value is not a number: 'abc'"},
         MalformedCase{"bad_param_fov.log", 3, "PARAM: laser_front_laser_fov must be positive, got -10"},
+        MalformedCase{"bad_geometry_contradiction.log", 3, "do not fit 181 beams in any unit"},
         MalformedCase{"bad_rawlaser_max_range.log", 3, "RAWLASER1: maximum_range must be positive, got 0"}),
     [](const ::testing::TestParamInfo<MalformedCase>& info) {
       std::string name = info.param.file;

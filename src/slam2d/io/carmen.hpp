@@ -14,6 +14,15 @@
 // PARAM lines (laser_front_laser_fov, laser_front_laser_resolution, robot_frontlaser_offset,
 // robot_frontlaser_side_offset, robot_frontlaser_angular_offset, robot_front_laser_max and the
 // rear equivalents) and the reader options override this. RLASER is mounted facing backwards.
+//
+// The geometry checks itself (docs/sensor_geometry.md): at the first FLASER/RLASER line of each
+// beam count the reader decides field of view, angle_min, increment and maximum range from the
+// options, the PARAM lines and the convention, checking beams x resolution against the field of
+// view (within one beam step). A PARAM's unit is guessed only when unambiguous: CARMEN writes
+// degrees, but a value <= 2 pi that fits the beam count only when read as radians is radians.
+// PARAM lines that contradict each other in every unit fall back to the convention with a
+// warning when the convention agrees with one of them, and are a ParseError naming the PARAM's
+// line otherwise. What was decided, and why, is in CarmenStats::old_laser_geometries.
 // ROBOTLASER1 and RAWLASER declare their own angles and maximum range; ROBOTLASER1's mounting is
 // robot_pose^-1 * laser_pose, RAWLASER's is the identity (a raw scan has no robot).
 
@@ -23,6 +32,7 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/odometry.hpp"
@@ -55,15 +65,50 @@ struct OdometryMessage {
 using CarmenMessage = std::variant<LaserMessage, OdometryMessage, TruePoseMessage>;
 
 struct CarmenReaderOptions {
-  /// Overrides for FLASER/RLASER geometry (rad); PARAM lines are used when these are unset.
-  std::optional<double> field_of_view;
-  std::optional<double> angle_increment;
-  std::optional<double> angle_min;
+  /// Overrides for FLASER/RLASER geometry (rad); PARAM lines and the convention are used when
+  /// these are unset. An override beats a PARAM line; a PARAM it contradicts is dropped with a warning.
+  std::optional<double> field_of_view;    // rad, in (0, 2 pi]
+  std::optional<double> angle_increment;  // rad, > 0
+  std::optional<double> angle_min;        // rad; default -field_of_view / 2
   /// m. FLASER/RLASER carry no maximum range: readings at or above are "no return".
   /// A robot_front_laser_max / robot_rear_laser_max PARAM overrides the default.
   std::optional<double> range_max;
   double default_range_max = 80.0;  // m, SICK LMS in its 80 m mode (returns ~81.9 m for "no return")
   double range_min = 0.0;           // m
+};
+
+/// Where a FLASER/RLASER geometry value came from.
+enum class GeometrySource {
+  kConvention,      // the CARMEN convention: 180 deg centred on the x axis; 80 m (default_range_max)
+  kParam,           // a PARAM line, in CARMEN's unit (degrees, metres)
+  kParamUnitGuess,  // a PARAM line whose unit was guessed: radians where CARMEN writes degrees
+  kDerived,         // from the other values: increment = fov / steps, fov = steps x increment, angle_min = -fov / 2
+  kOverride,        // a reader option (a command-line override)
+};
+
+/// "convention", "PARAM", "PARAM (unit guessed)", "derived", "override".
+const char* to_string(GeometrySource source);
+
+struct GeometryValue {
+  double value = 0.0;  // rad for angles, m for the range
+  GeometrySource source = GeometrySource::kConvention;
+  std::string reason;  // for people, e.g. "PARAM laser_front_laser_fov 3.14159 (line 3) read as radians"
+};
+
+/// The geometry decided for one old-format laser (FLASER: front, RLASER: rear) and one beam
+/// count, at its first laser line, and kept until a PARAM line changes that laser's geometry.
+struct OldLaserGeometry {
+  bool rear = false;
+  std::size_t beams = 0;
+  std::size_t first_line = 0;  // the laser line it was decided at
+  std::size_t scans = 0;       // laser lines that used it
+  GeometryValue field_of_view;    // rad
+  GeometryValue angle_min;        // rad
+  GeometryValue angle_increment;  // rad
+  GeometryValue range_max;        // m
+  std::size_t readings = 0;              // ranges read with it
+  std::size_t readings_at_range_max = 0;  // of those, at or above range_max (no return)
+  std::vector<std::string> warnings;     // PARAM lines dropped, ambiguous units
 };
 
 struct CarmenStats {
@@ -79,11 +124,16 @@ struct CarmenStats {
   std::size_t backwards_laser_timestamps = 0;  // steps back in time, over laser messages only
   std::optional<double> first_stamp;     // s, of the first timestamped message
   std::optional<double> last_stamp;      // s, of the last timestamped message
+  /// FLASER/RLASER geometries in the order they were decided (one per laser and beam count).
+  std::vector<OldLaserGeometry> old_laser_geometries;
+  /// The front (FLASER) geometry used by the most scans, or null when the log has no FLASER.
+  const OldLaserGeometry* front_geometry() const;
 };
 
 class CarmenReader {
  public:
-  /// Opens the log. Throws Error("PATH: cannot open: ...") if it cannot be read.
+  /// Opens the log. Throws Error("PATH: cannot open: ...") if it cannot be read, and Error when an
+  /// option is out of range (field of view outside (0, 2 pi], non-positive increment or range).
   explicit CarmenReader(const std::string& path, CarmenReaderOptions options = {});
   ~CarmenReader();
   CarmenReader(CarmenReader&&) noexcept;
@@ -91,7 +141,8 @@ class CarmenReader {
 
   /// The next message in file order, or nullopt at the end. Throws ParseError("PATH:LINE: ...")
   /// on a malformed line: wrong field count, a non-number, NaN/inf/negative ranges,
-  /// non-finite poses or timestamps.
+  /// non-finite poses or timestamps; and at a PARAM line whose geometry contradicts the beam
+  /// count, the other PARAM lines and the convention in every unit (thrown at the first laser line).
   std::optional<CarmenMessage> next();
   /// Counts so far (complete once next() has returned nullopt).
   const CarmenStats& stats() const;

@@ -1,0 +1,66 @@
+#include "sensor_options.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+
+#include "slam2d/core/angles.hpp"
+
+namespace slam2d::cli {
+
+namespace {
+
+// A finite number in (low, high]; `low_open` false makes it [low, high]; an infinite `high`, no upper bound.
+CLI::Validator number_in(double low, double high, bool low_open, const std::string& unit) {
+  const std::string range = std::isinf(high) ? fmt::format("{}{}, inf)", low_open ? "(" : "[", low)
+                                              : fmt::format("{}{}, {}]", low_open ? "(" : "[", low, high);
+  return CLI::Validator(
+      [=](const std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || value > high ||
+            (low_open ? value <= low : value < low)) {
+          return "must be a finite number in " + range + " " + unit + ", got " + text;
+        }
+        return {};
+      },
+      unit + " in " + range);
+}
+
+// An option whose value, times `scale`, is stored in `target`.
+void add_number(CLI::App* command, const std::string& name, std::optional<double>& target, double scale,
+                const CLI::Validator& validator, const std::string& help) {
+  command->add_option_function<double>(name, [&target, scale](double value) { target = scale * value; }, help)
+      ->check(validator);
+}
+
+}  // namespace
+
+void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const std::string& range_max_help) {
+  const double radians_per_degree = deg_to_rad(1.0);
+  add_number(command, "--fov", options.field_of_view, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
+             "deg: FLASER/RLASER field of view (default: the log's PARAM lines checked against the beam count, else 180)");
+  add_number(command, "--angle-min", options.angle_min, radians_per_degree, number_in(-360.0, 360.0, false, "deg"),
+             "deg: FLASER/RLASER angle of the first beam (default: -fov / 2)");
+  add_number(command, "--angle-increment", options.angle_increment, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
+             "deg: FLASER/RLASER angle between beams (default: the log's PARAM, else fov / steps)");
+  add_number(command, "--range-max", options.range_max, 1.0,
+             number_in(0.0, std::numeric_limits<double>::infinity(), true, "m"),
+             range_max_help.empty() ? "m: FLASER/RLASER readings at or above are no return (default: the log's PARAM, else 80)"
+                                    : range_max_help);
+}
+
+void print_geometry_warnings(const CarmenReader& reader) {
+  for (const OldLaserGeometry& geometry : reader.stats().old_laser_geometries) {
+    for (const std::string& warning : geometry.warnings) {
+      std::fputs(fmt::format("{}:{}: warning: {} geometry, {} beams: {}\n", reader.path(), geometry.first_line,
+                             geometry.rear ? "RLASER" : "FLASER", geometry.beams, warning)
+                     .c_str(),
+                 stderr);
+    }
+  }
+}
+
+}  // namespace slam2d::cli
