@@ -8,6 +8,11 @@ FAULTS table below) x each method (map --method hector|graph|rbpf, odometry --ma
     slam2d eval TRAJ --relations RELATIONS --json
 and the same method on the clean log; prints a markdown table of the mean translational relation
 error (m) of the perturbed run and its ratio to the clean run (or, with --json, one JSON document).
+The last column is the relations scored in the perturbed / the clean run: decimate and scan-gap
+remove scans, so some relations have no pose; then the clean error is the clean run's over the
+same relations (its poses at the scans the perturbed run kept), so the ratio compares like with like. Faults that move stamps (jitter, backwards) are
+scored at the original stamps: the method sees the moved ones, then its trajectory's scan i gets
+the original scan i's stamp back before `slam2d eval`.
 
 Corrected logs (--corrected): the eight SLAM-corrected logs of $SLAM2D_DATA/carmen-corrected,
 whose FLASER poses are the reference trajectory. Each is first reduced to its PARAM and FLASER
@@ -67,6 +72,9 @@ FAULTS = {
     "range-max": ("range-max:max=30", "range-max:max=5.6"),
 }
 SEVERITIES = ["mild", "severe"]
+# Faults that move scan stamps: the trajectory is scored at the original stamps (scan i to scan i),
+# since the relations name the true ones.
+RESTAMP = {"jitter", "backwards"}
 # The odometry degradation of the corrected logs, applied in this order.
 DEGRADE = ["wheel-scale:translation=1.03,rotation=1.01", "heading-drift:rate=0.5", "stall:every=60,duration=1.2"]
 METHODS = ["hector", "graph", "rbpf", "pl-icp"]
@@ -90,8 +98,32 @@ def method_command(args, method, log, out_dir):
     return command, os.path.join(out_dir, "trajectory.txt")
 
 
-def run_method(args, method, log, out_dir, eval_arguments):
-    """Runs the method and the evaluation; keeps the result in out_dir/result.json (for --resume)."""
+def laser_stamps(log_path):
+    """The ipc stamps of the FLASER lines of a (possibly gzipped) log, as text, in file order."""
+    opener = gzip.open if log_path.endswith(".gz") else open
+    with opener(log_path, "rt") as f:
+        return [tokens[int(tokens[1]) + 8] for tokens in (line.split() for line in f) if tokens and tokens[0] == "FLASER"]
+
+
+def restore_stamps(trajectory, original_log, perturbed_log, out):
+    """Rewrites the trajectory's stamps from the perturbed log's scan stamps to the original ones
+    (scan i to scan i), so that a fault that moves stamps is scored on the same relations."""
+    original, perturbed = laser_stamps(original_log), laser_stamps(perturbed_log)
+    if len(original) != len(perturbed):
+        raise RuntimeError(f"{perturbed_log}: {len(perturbed)} scans for {len(original)} in {original_log}")
+    to_original = {float(p): o for p, o in zip(perturbed, original)}
+    with open(trajectory) as f, open(out, "w") as restored:
+        for line in f:
+            tokens = line.split()
+            if tokens and not tokens[0].startswith("#") and float(tokens[0]) in to_original:
+                tokens[0] = to_original[float(tokens[0])]
+            restored.write(" ".join(tokens) + "\n")
+    return out
+
+
+def run_method(args, method, log, out_dir, eval_arguments, original_log=None):
+    """Runs the method and the evaluation; keeps the result in out_dir/result.json (for --resume).
+    With original_log, the trajectory's stamps are first mapped back to that log's (restore_stamps)."""
     result_path = os.path.join(out_dir, "result.json")
     if args.resume and os.path.exists(result_path):
         with open(result_path) as f:
@@ -100,6 +132,8 @@ def run_method(args, method, log, out_dir, eval_arguments):
     command, trajectory = method_command(args, method, log, out_dir)
     try:
         summary = run_json(command)
+        if original_log:
+            trajectory = restore_stamps(trajectory, original_log, log, os.path.join(out_dir, "trajectory_original_stamps.txt"))
         error = run_json([args.slam2d, "eval", trajectory, *eval_arguments, "--json"])
         result = {"error": error, "cpu_s": summary.get("cpu_s"), "command": " ".join(command)}
     except (RuntimeError, json.JSONDecodeError) as failure:
@@ -144,9 +178,13 @@ def public_benchmark(args):
 
     def run(log, fault, severity, method):
         relations = ["--relations", os.path.join(args.data, LOGS[log][1])]
-        source = os.path.join(args.data, LOGS[log][0]) if fault == "clean" else perturbed_path(log, fault, severity)
+        original = os.path.join(args.data, LOGS[log][0])
+        source = original if fault == "clean" else perturbed_path(log, fault, severity)
         out_dir = os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
-        return run_method(args, method, source, out_dir, relations)
+        return run_method(args, method, source, out_dir, relations, original if fault in RESTAMP else None)
+
+    def run_dir(log, fault, severity, method):
+        return os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
 
     runs = [(log, "clean", "-", method) for log in args.logs for method in args.methods]
     runs += [(log, fault, severity, method) for (log, fault, severity) in cases for method in args.methods]
@@ -154,25 +192,47 @@ def public_benchmark(args):
     rows = []
     for (log, fault, severity, method), result in results.items():
         clean = results[log, "clean", "-", method]["error"]
+        if clean and result["error"] and result["error"]["relations"] != clean["relations"]:
+            clean = clean_on_same_scans(args, run_dir(log, "clean", "-", method), run_dir(log, fault, severity, method),
+                                        os.path.join(args.data, LOGS[log][1]))
         value = result["error"]["trans_mean"] if result["error"] else None
         clean_value = clean["trans_mean"] if clean else None
         rows.append({"log": log, "fault": fault, "severity": severity,
                      "spec": spec_of.get((fault, severity), ""), "method": method,
                      "trans_mean_m": value, "clean_trans_mean_m": clean_value, "ratio": ratio(value, clean_value),
                      "rot_mean_deg": result["error"]["rot_mean_deg"] if result["error"] else None,
+                     "relations": result["error"]["relations"] if result["error"] else None,
+                     "clean_relations": clean["relations"] if clean else None,
                      "cpu_s": result.get("cpu_s"), "failure": result.get("failure"), "command": result["command"]})
     changes = {f"{log}/{fault}/{severity}": summary for (log, fault, severity), summary in zip(cases, perturb_summaries) if summary}
     return rows, changes
 
 
+def clean_on_same_scans(args, clean_dir, perturbed_dir, relations):
+    """The clean run's relation error over the scans the perturbed run kept (decimate, scan-gap),
+    so that both are scored on the same relations."""
+    kept = set()
+    for name in ("trajectory_original_stamps.txt", "trajectory.txt"):
+        path = os.path.join(perturbed_dir, name)
+        if os.path.exists(path):
+            with open(path) as f:
+                kept = {float(line.split()[0]) for line in f if line.strip() and not line.startswith("#")}
+            break
+    subset = os.path.join(perturbed_dir, "clean_same_scans.txt")
+    with open(os.path.join(clean_dir, "trajectory.txt")) as f, open(subset, "w") as out:
+        out.writelines(line for line in f if line.strip() and not line.startswith("#") and float(line.split()[0]) in kept)
+    return run_json([args.slam2d, "eval", subset, "--relations", relations, "--json"])
+
+
 def print_public_table(rows):
-    print("| log | fault | severity | spec | method | clean (m) | perturbed (m) | ratio |")
-    print("|---|---|---|---|---|---:|---:|---:|")
+    print("| log | fault | severity | spec | method | clean (m) | perturbed (m) | ratio | relations |")
+    print("|---|---|---|---|---|---:|---:|---:|---:|")
     for r in rows:
         if r["fault"] == "clean":
             continue
         print(f"| {r['log']} | {r['fault']} | {r['severity']} | `{r['spec']}` | {r['method']} | {fmt(r['clean_trans_mean_m'])}"
-              f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)} |")
+              f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)}"
+              f" | {r['relations']}/{r['clean_relations']} |")
 
 
 def fmt(value, digits=3):
