@@ -102,6 +102,7 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
 TEST(FaultSpec, BadSpecsAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"wobble", "unknown fault kind 'wobble'"},
+      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, wheel-scale, heading-drift, scan-gap,"},
       {"stall:every=60,lenght=2", "unknown key 'lenght' for stall (keys: every, start, duration)"},
       {"stall:every=abc", "every is not a number: 'abc'"},
       {"stall:every=-5", "every=-5 is out of range (0, inf)"},

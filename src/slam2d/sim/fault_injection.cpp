@@ -47,7 +47,6 @@ class SpecArguments {
   [[noreturn]] void fail(const std::string& message) const {
     throw Error("--fault '" + spec_ + "': " + message);
   }
-  const std::string& kind() const { return kind_; }
   double number(std::string_view key, double fallback, const Range& range);
   std::size_t count(std::string_view key, std::size_t fallback, std::size_t minimum);
   void finish() const;
@@ -607,16 +606,17 @@ Fault parse_fault(std::string_view spec) {
   const std::size_t colon = std::min(spec.find(':'), spec.size());
   const std::string kind(spec.substr(0, colon));
   const std::string_view parameters = colon < spec.size() ? spec.substr(colon + 1) : std::string_view();
-  SpecArguments arguments(std::string(spec), kind, parameters);
-  for (const auto& [name, parser] : fault_table()) {
-    if (name != kind) continue;
-    const Fault fault = parser(arguments);
-    arguments.finish();
-    return fault;
+  const auto& table = fault_table();
+  const auto entry = std::find_if(table.begin(), table.end(), [&](const auto& e) { return e.first == kind; });
+  if (entry == table.end()) {
+    std::string kinds;
+    for (const std::string& name : fault_kinds()) kinds += (kinds.empty() ? "" : ", ") + name;
+    throw Error("--fault '" + std::string(spec) + "': unknown fault kind '" + kind + "' (kinds: " + kinds + ")");
   }
-  std::string kinds;
-  for (const std::string& name : fault_kinds()) kinds += (kinds.empty() ? "" : ", ") + name;
-  arguments.fail("unknown fault kind '" + kind + "' (kinds: " + kinds + ")");
+  SpecArguments arguments(std::string(spec), kind, parameters);
+  const Fault fault = entry->second(arguments);
+  arguments.finish();
+  return fault;
 }
 
 std::string fault_spec(const Fault& fault) {
