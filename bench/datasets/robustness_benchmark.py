@@ -1,0 +1,377 @@
+#!/usr/bin/env python3
+"""Robustness benchmark: how methods degrade under injected faults (docs/faults.md).
+
+Public logs (default): for each log (intel, aces, fr079) x each fault at two severities (the
+FAULTS table below) x each method (map --method hector|graph|rbpf, odometry --matcher pl-icp):
+    slam2d perturb LOG --out LOG2 --fault SPEC --seed SEED --quiet --json
+    slam2d map LOG2 --method METHOD --out DIR --quiet --json      (or: slam2d odometry LOG2 --matcher pl-icp ...)
+    slam2d eval TRAJ --relations RELATIONS --json
+and the same method on the clean log; prints a markdown table of the mean translational relation
+error (m) of the perturbed run and its ratio to the clean run (or, with --json, one JSON document).
+The last column is the relations scored in the perturbed / the clean run: decimate and scan-gap
+remove scans, so some relations have no pose; then the clean error is the clean run's over the
+same relations (its poses at the scans the perturbed run kept), so the ratio compares like with like. Faults that move stamps (jitter, backwards) are
+scored at the original stamps: the method sees the moved ones, then its trajectory's scan i gets
+the original scan i's stamp back before `slam2d eval`.
+
+Corrected logs (--corrected): the eight SLAM-corrected logs of $SLAM2D_DATA/carmen-corrected,
+whose FLASER poses are the reference trajectory. Each is first reduced to its PARAM and FLASER
+lines (its ODOM lines are the raw odometry in another frame, its NEFF lines filter diagnostics;
+no method reads either), so the laser lines' odometry is the corrected trajectory itself. That
+odometry is degraded with the injector (DEGRADE below: wheel-scale + heading-drift + stall), the
+methods run on the degraded log, and
+    slam2d eval TRAJ --reference REF --json
+gives ATE and RPE against REF, the corrected poses written as 'stamp x y theta'. The row
+'odometry' is the degraded odometry itself. Logs whose FLASER stamps are not strictly increasing
+(belgioioso: printed with 6 significant digits, so all equal; freiburg-campus and orebro: all 0)
+get the scan index as the stamp, in both the reduced log and REF; there, the fault windows count
+scans, not seconds ('every=60' is every 60 scans).
+
+Usage: bench/datasets/robustness_benchmark.py [--slam2d build/release/bin/slam2d] [--data $SLAM2D_DATA]
+           [--logs intel aces fr079] [--faults stall decimate ...] [--severities mild severe]
+           [--methods hector graph rbpf pl-icp] [--seed 1] [--jobs 1] [--quick] [--corrected]
+           [--out /tmp/slam2d_robustness_benchmark] [--resume] [--json]
+--quick: aces only, the severe severity, faults stall, wheel-scale, decimate, range-max and
+spurious-short, methods hector and pl-icp (with --corrected: edmonton and seattle); an explicit
+--logs/--faults/--severities/--methods wins over the --quick choice. --resume reuses the results
+already in --out. The full public run is 3 logs x 15 faults x 2 severities x 4 methods (360
+method runs, hours on 2 cores).
+"""
+
+import argparse
+import concurrent.futures
+import gzip
+import json
+import os
+import subprocess
+import sys
+
+LOGS = {
+    "intel": ("intel/intel.clf.gz", "intel/intel.relations"),
+    "aces": ("aces/aces.clf.gz", "aces/aces.relations"),
+    "fr079": ("fr079/fr079.clf.gz", "fr079/fr079.relations"),
+}
+CORRECTED_LOGS = ["acapulco", "belgioioso", "edmonton", "fhw", "freiburg-101", "freiburg-campus", "orebro", "seattle"]
+
+# fault -> (mild, severe) specs.
+FAULTS = {
+    "stall": ("stall:every=60,duration=1.2", "stall:every=60,duration=3"),
+    "odom-gap": ("odom-gap:every=60,duration=1.2", "odom-gap:every=60,duration=3"),
+    "wheel-scale": ("wheel-scale:translation=1.02", "wheel-scale:translation=1.05,rotation=1.02"),
+    "heading-drift": ("heading-drift:rate=0.5", "heading-drift:rate=2"),
+    "scan-gap": ("scan-gap:every=60,duration=1.2", "scan-gap:every=60,duration=3"),
+    "decimate": ("decimate:k=2", "decimate:k=4"),
+    "jitter": ("jitter:sigma=0.01", "jitter:sigma=0.05"),
+    "duplicate": ("duplicate:p=0.01", "duplicate:p=0.05"),
+    "backwards": ("backwards:p=0.01,by=0.5", "backwards:p=0.05,by=0.5"),
+    "range-noise": ("range-noise:sigma=0.03", "range-noise:sigma=0.1"),
+    "spurious-max": ("spurious-max:p=0.01", "spurious-max:p=0.05"),
+    "spurious-short": ("spurious-short:p=0.01", "spurious-short:p=0.05"),
+    "beams": ("beams:k=2", "beams:k=4"),
+    "fov": ("fov:deg=120", "fov:deg=90"),
+    "range-max": ("range-max:max=30", "range-max:max=5.6"),
+}
+SEVERITIES = ["mild", "severe"]
+# Faults that move scan stamps: the trajectory is scored at the original stamps (scan i to scan i),
+# since the relations name the true ones.
+RESTAMP = {"jitter", "backwards"}
+# The odometry degradation of the corrected logs, applied in this order.
+DEGRADE = ["wheel-scale:translation=1.03,rotation=1.01", "heading-drift:rate=0.5", "stall:every=60,duration=1.2"]
+METHODS = ["hector", "graph", "rbpf", "pl-icp"]
+QUICK = {"logs": ["aces"], "corrected_logs": ["edmonton", "seattle"], "severities": ["severe"],
+         "faults": ["stall", "wheel-scale", "decimate", "range-max", "spurious-short"], "methods": ["hector", "pl-icp"]}
+
+
+def run_json(command):
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"exit {result.returncode}: {' '.join(command)}: {result.stderr.strip()[-500:]}")
+    return json.loads(result.stdout)
+
+
+def method_command(args, method, log, out_dir):
+    """The command that runs `method` on `log`, and the trajectory it writes."""
+    if method == "pl-icp":
+        trajectory = os.path.join(out_dir, "trajectory.txt")
+        return [args.slam2d, "odometry", log, "--matcher", "pl-icp", "--out", trajectory, "--quiet", "--json"], trajectory
+    command = [args.slam2d, "map", log, "--method", method, "--out", out_dir, "--quiet", "--json"]
+    return command, os.path.join(out_dir, "trajectory.txt")
+
+
+def laser_stamps(log_path):
+    """The ipc stamps of the FLASER lines of a (possibly gzipped) log, as text, in file order."""
+    opener = gzip.open if log_path.endswith(".gz") else open
+    with opener(log_path, "rt") as f:
+        return [tokens[int(tokens[1]) + 8] for tokens in (line.split() for line in f) if tokens and tokens[0] == "FLASER"]
+
+
+def restore_stamps(trajectory, original_log, perturbed_log, out):
+    """Rewrites the trajectory's stamps from the perturbed log's scan stamps to the original ones
+    (scan i to scan i), so that a fault that moves stamps is scored on the same relations."""
+    original, perturbed = laser_stamps(original_log), laser_stamps(perturbed_log)
+    if len(original) != len(perturbed):
+        raise RuntimeError(f"{perturbed_log}: {len(perturbed)} scans for {len(original)} in {original_log}")
+    to_original = {float(p): o for p, o in zip(perturbed, original)}
+    with open(trajectory) as f, open(out, "w") as restored:
+        for line in f:
+            tokens = line.split()
+            if tokens and not tokens[0].startswith("#") and float(tokens[0]) in to_original:
+                tokens[0] = to_original[float(tokens[0])]
+            restored.write(" ".join(tokens) + "\n")
+    return out
+
+
+def run_method(args, method, log, out_dir, eval_arguments, original_log=None):
+    """Runs the method and the evaluation; keeps the result in out_dir/result.json (for --resume).
+    With original_log, the trajectory's stamps are first mapped back to that log's (restore_stamps)."""
+    result_path = os.path.join(out_dir, "result.json")
+    if args.resume and os.path.exists(result_path):
+        with open(result_path) as f:
+            return json.load(f)
+    os.makedirs(out_dir, exist_ok=True)
+    command, trajectory = method_command(args, method, log, out_dir)
+    try:
+        summary = run_json(command)
+        if original_log:
+            trajectory = restore_stamps(trajectory, original_log, log, os.path.join(out_dir, "trajectory_original_stamps.txt"))
+        error = run_json([args.slam2d, "eval", trajectory, *eval_arguments, "--json"])
+        result = {"error": error, "cpu_s": summary.get("cpu_s"), "command": " ".join(command)}
+    except (RuntimeError, json.JSONDecodeError) as failure:
+        result = {"error": None, "failure": str(failure), "command": " ".join(command)}
+    with open(result_path, "w") as f:
+        json.dump(result, f)
+    return result
+
+
+def perturb(args, log, specs, out):
+    if not (args.resume and os.path.exists(out)):
+        command = [args.slam2d, "perturb", log, "--out", out, "--seed", str(args.seed), "--quiet", "--json"]
+        for spec in specs:
+            command += ["--fault", spec]
+        return run_json(command)
+    return None
+
+
+def parallel(args, function, items):
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        return list(pool.map(lambda item: function(*item), items))
+
+
+def ratio(value, clean):
+    return value / clean if value is not None and clean else None
+
+
+# ---------------------------------------------------------------------------------------------
+# Public logs against their relations.
+
+def public_benchmark(args):
+    logs_dir = os.path.join(args.out, "logs")
+    os.makedirs(logs_dir, exist_ok=True)
+    cases = [(log, fault, severity) for log in args.logs for fault in args.faults for severity in args.severities]
+
+    def perturbed_path(log, fault, severity):
+        return os.path.join(logs_dir, f"{log}_{fault}_{severity}.clf.gz")
+
+    spec_of = {(fault, severity): FAULTS[fault][SEVERITIES.index(severity)] for fault in args.faults for severity in args.severities}
+    perturb_summaries = parallel(args, lambda log, fault, severity: perturb(
+        args, os.path.join(args.data, LOGS[log][0]), [spec_of[fault, severity]], perturbed_path(log, fault, severity)), cases)
+
+    def run(log, fault, severity, method):
+        relations = ["--relations", os.path.join(args.data, LOGS[log][1])]
+        original = os.path.join(args.data, LOGS[log][0])
+        source = original if fault == "clean" else perturbed_path(log, fault, severity)
+        out_dir = os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
+        return run_method(args, method, source, out_dir, relations, original if fault in RESTAMP else None)
+
+    def run_dir(log, fault, severity, method):
+        return os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
+
+    runs = [(log, "clean", "-", method) for log in args.logs for method in args.methods]
+    runs += [(log, fault, severity, method) for (log, fault, severity) in cases for method in args.methods]
+    results = dict(zip(runs, parallel(args, run, runs)))
+    rows = []
+    for (log, fault, severity, method), result in results.items():
+        clean = results[log, "clean", "-", method]["error"]
+        if clean and result["error"] and result["error"]["relations"] != clean["relations"]:
+            clean = clean_on_same_scans(args, run_dir(log, "clean", "-", method), run_dir(log, fault, severity, method),
+                                        os.path.join(args.data, LOGS[log][1]))
+        value = result["error"]["trans_mean"] if result["error"] else None
+        clean_value = clean["trans_mean"] if clean else None
+        rows.append({"log": log, "fault": fault, "severity": severity,
+                     "spec": spec_of.get((fault, severity), ""), "method": method,
+                     "trans_mean_m": value, "clean_trans_mean_m": clean_value, "ratio": ratio(value, clean_value),
+                     "rot_mean_deg": result["error"]["rot_mean_deg"] if result["error"] else None,
+                     "relations": result["error"]["relations"] if result["error"] else None,
+                     "clean_relations": clean["relations"] if clean else None,
+                     "cpu_s": result.get("cpu_s"), "failure": result.get("failure"), "command": result["command"]})
+    changes = {f"{log}/{fault}/{severity}": summary for (log, fault, severity), summary in zip(cases, perturb_summaries) if summary}
+    return rows, changes
+
+
+def clean_on_same_scans(args, clean_dir, perturbed_dir, relations):
+    """The clean run's relation error over the scans the perturbed run kept (decimate, scan-gap),
+    so that both are scored on the same relations."""
+    kept = set()
+    for name in ("trajectory_original_stamps.txt", "trajectory.txt"):
+        path = os.path.join(perturbed_dir, name)
+        if os.path.exists(path):
+            with open(path) as f:
+                kept = {float(line.split()[0]) for line in f if line.strip() and not line.startswith("#")}
+            break
+    subset = os.path.join(perturbed_dir, "clean_same_scans.txt")
+    with open(os.path.join(clean_dir, "trajectory.txt")) as f, open(subset, "w") as out:
+        out.writelines(line for line in f if line.strip() and not line.startswith("#") and float(line.split()[0]) in kept)
+    return run_json([args.slam2d, "eval", subset, "--relations", relations, "--json"])
+
+
+def print_public_table(rows):
+    print("| log | fault | severity | spec | method | clean (m) | perturbed (m) | ratio | relations |")
+    print("|---|---|---|---|---|---:|---:|---:|---:|")
+    for r in rows:
+        if r["fault"] == "clean":
+            continue
+        print(f"| {r['log']} | {r['fault']} | {r['severity']} | `{r['spec']}` | {r['method']} | {fmt(r['clean_trans_mean_m'])}"
+              f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)}"
+              f" | {r['relations']}/{r['clean_relations']} |")
+
+
+def fmt(value, digits=3):
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+# ---------------------------------------------------------------------------------------------
+# Corrected logs against their own poses.
+
+def reduce_corrected_log(source, log_out, reference_out):
+    """Keeps the PARAM and FLASER lines; writes REF 'stamp x y theta' from the FLASER odometry
+    triple. Stamps stay when strictly increasing, else become the scan index (in both files)."""
+    params, flasers = [], []
+    with gzip.open(source, "rt") as f:
+        for line in f:
+            tokens = line.split()
+            if tokens and tokens[0] == "PARAM":
+                params.append(line.rstrip("\n"))
+            elif tokens and tokens[0] == "FLASER":
+                flasers.append(tokens)
+    stamps = [float(t[int(t[1]) + 8]) for t in flasers]
+    use_index = any(b <= a for a, b in zip(stamps, stamps[1:]))
+    with open(log_out, "w") as log, open(reference_out, "w") as reference:
+        log.write("# PARAM and FLASER lines of %s%s\n" % (os.path.basename(source), ", scan index as stamp" if use_index else ""))
+        for line in params:
+            log.write(line + "\n")
+        for index, tokens in enumerate(flasers):
+            n = int(tokens[1])
+            stamp = str(index) if use_index else tokens[n + 8]
+            body = tokens[:n + 8]
+            log.write(" ".join(body + [stamp, "nohost", stamp]) + "\n")
+            reference.write(f"{stamp} {tokens[n + 5]} {tokens[n + 6]} {tokens[n + 7]}\n")
+    return use_index
+
+
+def odometry_trajectory(log_path, out):
+    """'stamp x y theta' of the FLASER odometry triples of a (possibly gzipped) log."""
+    opener = gzip.open if log_path.endswith(".gz") else open
+    with opener(log_path, "rt") as f, open(out, "w") as trajectory:
+        for line in f:
+            tokens = line.split()
+            if tokens and tokens[0] == "FLASER":
+                n = int(tokens[1])
+                trajectory.write(f"{tokens[n + 8]} {tokens[n + 5]} {tokens[n + 6]} {tokens[n + 7]}\n")
+
+
+def corrected_benchmark(args):
+    work = os.path.join(args.out, "corrected")
+    os.makedirs(work, exist_ok=True)
+    index_stamps = {}
+    for name in args.logs:
+        source = os.path.join(args.data, "carmen-corrected", f"{name}-corrected.log.gz")
+        index_stamps[name] = reduce_corrected_log(source, os.path.join(work, f"{name}.clf"), os.path.join(work, f"{name}.ref.txt"))
+    parallel(args, lambda name: perturb(args, os.path.join(work, f"{name}.clf"), DEGRADE,
+                                        os.path.join(work, f"{name}_degraded.clf")), [(name,) for name in args.logs])
+
+    def run(name, condition, method):
+        log = os.path.join(work, f"{name}.clf" if condition == "clean" else f"{name}_degraded.clf")
+        reference = ["--reference", os.path.join(work, f"{name}.ref.txt")]
+        out_dir = os.path.join(args.out, "runs", f"corrected_{method}_{name}_{condition}")
+        if method == "odometry":
+            os.makedirs(out_dir, exist_ok=True)
+            trajectory = os.path.join(out_dir, "trajectory.txt")
+            odometry_trajectory(log, trajectory)
+            return {"error": run_json([args.slam2d, "eval", trajectory, *reference, "--json"]), "command": "(input odometry)"}
+        return run_method(args, method, log, out_dir, reference)
+
+    runs = [(name, condition, method) for name in args.logs for condition in ("clean", "degraded")
+            for method in ["odometry"] + args.methods]
+    rows = []
+    for (name, condition, method), result in zip(runs, parallel(args, run, runs)):
+        error = result["error"] or {}
+        rows.append({"log": name, "condition": condition, "method": method, "index_stamps": index_stamps[name],
+                     "ate_rmse_m": error.get("ate_rmse"), "rpe_trans_rmse_m": error.get("rpe_trans_rmse"),
+                     "rpe_rot_rmse_deg": error.get("rpe_rot_rmse_deg"), "matched": error.get("matched"),
+                     "failure": result.get("failure"), "command": result["command"]})
+    return rows
+
+
+def print_corrected_table(rows):
+    print(f"degradation: {' then '.join(DEGRADE)}")
+    print()
+    print("| log | method | clean ATE (m) | degraded ATE (m) | degraded RPE (m) | degraded RPE (deg) |")
+    print("|---|---|---:|---:|---:|---:|")
+    by_key = {(r["log"], r["condition"], r["method"]): r for r in rows}
+    for r in rows:
+        if r["condition"] != "degraded":
+            continue
+        clean = by_key[r["log"], "clean", r["method"]]
+        name = r["log"] + (" (index stamps)" if r["index_stamps"] else "")
+        print(f"| {name} | {r['method']} | {fmt(clean['ate_rmse_m'])} | {fmt(r['ate_rmse_m'])}"
+              f" | {fmt(r['rpe_trans_rmse_m'])} | {fmt(r['rpe_rot_rmse_deg'], 2)} |")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--slam2d", default=os.environ.get("SLAM2D_BIN", "build/release/bin/slam2d"))
+    parser.add_argument("--data", default=os.environ.get("SLAM2D_DATA", "/work/shared/data"))
+    parser.add_argument("--logs", nargs="+")
+    parser.add_argument("--faults", nargs="+", choices=list(FAULTS))
+    parser.add_argument("--severities", nargs="+", choices=SEVERITIES)
+    parser.add_argument("--methods", nargs="+", choices=METHODS)
+    parser.add_argument("--seed", type=int, default=1, help="seed of slam2d perturb")
+    parser.add_argument("--jobs", type=int, default=1, help="runs at a time")
+    parser.add_argument("--quick", action="store_true", help="a small subset (see above)")
+    parser.add_argument("--corrected", action="store_true", help="the corrected logs, ATE/RPE against their poses")
+    parser.add_argument("--out", default="/tmp/slam2d_robustness_benchmark")
+    parser.add_argument("--resume", action="store_true", help="reuse results already in --out")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    args = parser.parse_args()
+
+    known_logs = CORRECTED_LOGS if args.corrected else list(LOGS)
+    quick_logs = QUICK["corrected_logs"] if args.corrected else QUICK["logs"]
+    args.logs = args.logs or (quick_logs if args.quick else known_logs)
+    unknown = [log for log in args.logs if log not in known_logs]
+    if unknown:
+        parser.error(f"unknown logs {unknown}; choose from {known_logs}")
+    args.faults = args.faults or (QUICK["faults"] if args.quick else list(FAULTS))
+    args.severities = args.severities or (QUICK["severities"] if args.quick else SEVERITIES)
+    args.methods = args.methods or (QUICK["methods"] if args.quick else METHODS)
+
+    if args.corrected:
+        rows = corrected_benchmark(args)
+        if args.json:
+            json.dump({"degrade": DEGRADE, "seed": args.seed, "results": rows}, sys.stdout, indent=2)
+            print()
+        else:
+            print_corrected_table(rows)
+        return
+    rows, changes = public_benchmark(args)
+    if args.json:
+        json.dump({"seed": args.seed, "results": rows, "perturb": changes}, sys.stdout, indent=2)
+        print()
+    else:
+        print_public_table(rows)
+    for r in rows:
+        if r["failure"]:
+            print(f"failed: {r['log']} {r['fault']} {r['severity']} {r['method']}: {r['failure']}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,648 @@
+#include "slam2d/sim/fault_injection.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <set>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/io/number_format.hpp"
+
+namespace slam2d {
+
+namespace {
+
+using Messages = std::vector<CarmenMessage>;
+using Changes = std::vector<std::pair<std::string, double>>;
+
+// ---------------------------------------------------------------------------------------------
+// Specs: "kind:key=value,...".
+
+struct Range {
+  double low;
+  double high;
+  bool low_open = false;  // low itself is out
+};
+
+bool in_range(double value, const Range& range) {
+  return (range.low_open ? value > range.low : value >= range.low) && value <= range.high;
+}
+
+std::string describe(const Range& range) {
+  const std::string high = std::isinf(range.high) ? "inf)" : format_number(range.high) + "]";
+  return (range.low_open ? "(" : "[") + format_number(range.low) + ", " + high;
+}
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The key=value pairs of a spec, read by name; finish() refuses the keys nobody asked for.
+class SpecArguments {
+ public:
+  SpecArguments(std::string spec, std::string kind, std::string_view parameters);
+
+  [[noreturn]] void fail(const std::string& message) const {
+    throw Error("--fault '" + spec_ + "': " + message);
+  }
+  double number(std::string_view key, double fallback, const Range& range);
+  std::size_t count(std::string_view key, std::size_t fallback, std::size_t minimum);
+  void finish() const;
+
+ private:
+  const std::string* value(std::string_view key);
+
+  std::string spec_;
+  std::string kind_;
+  std::vector<std::pair<std::string, std::string>> pairs_;
+  std::vector<std::string> known_;
+};
+
+SpecArguments::SpecArguments(std::string spec, std::string kind, std::string_view parameters)
+    : spec_(std::move(spec)), kind_(std::move(kind)) {
+  if (parameters.empty()) return;
+  for (std::size_t begin = 0; begin <= parameters.size();) {
+    const std::size_t comma = std::min(parameters.find(',', begin), parameters.size());
+    const std::string_view pair = parameters.substr(begin, comma - begin);
+    const std::size_t equals = pair.find('=');
+    if (equals == std::string_view::npos || equals == 0) fail("expected key=value, got '" + std::string(pair) + "'");
+    std::string key(pair.substr(0, equals));
+    for (const auto& [seen, unused] : pairs_) {
+      if (seen == key) fail("key '" + key + "' given twice");
+    }
+    pairs_.emplace_back(std::move(key), std::string(pair.substr(equals + 1)));
+    begin = comma + 1;
+  }
+}
+
+const std::string* SpecArguments::value(std::string_view key) {
+  known_.emplace_back(key);
+  for (const auto& [name, text] : pairs_) {
+    if (name == key) return &text;
+  }
+  return nullptr;
+}
+
+double SpecArguments::number(std::string_view key, double fallback, const Range& range) {
+  const std::string* text = value(key);
+  if (text == nullptr) return fallback;
+  const std::optional<double> parsed = parse_double(*text);
+  if (!parsed || !std::isfinite(*parsed)) fail(std::string(key) + " is not a number: '" + *text + "'");
+  if (!in_range(*parsed, range)) fail(std::string(key) + "=" + *text + " is out of range " + describe(range));
+  return *parsed;
+}
+
+std::size_t SpecArguments::count(std::string_view key, std::size_t fallback, std::size_t minimum) {
+  const std::string* text = value(key);
+  if (text == nullptr) return fallback;
+  const std::optional<int> parsed = parse_int(*text);
+  if (!parsed) fail(std::string(key) + " is not an integer: '" + *text + "'");
+  if (*parsed < static_cast<int>(minimum)) fail(std::string(key) + "=" + *text + " must be >= " + std::to_string(minimum));
+  return static_cast<std::size_t>(*parsed);
+}
+
+void SpecArguments::finish() const {
+  for (const auto& [key, text] : pairs_) {
+    if (std::find(known_.begin(), known_.end(), key) != known_.end()) continue;
+    std::string keys;
+    for (const std::string& name : known_) keys += (keys.empty() ? "" : ", ") + name;
+    fail("unknown key '" + key + "' for " + kind_ + " (keys: " + keys + ")");
+  }
+}
+
+const Range kProbability{0.0, 1.0};
+const Range kPositive{0.0, kInf, true};
+const Range kFactor{0.0, 10.0, true};
+
+FaultWindows parse_windows(SpecArguments& arguments) {
+  FaultWindows windows;
+  windows.every = arguments.number("every", windows.every, kPositive);
+  windows.start = arguments.number("start", windows.every, {0.0, kInf});
+  windows.duration = arguments.number("duration", windows.duration, kPositive);
+  if (!(windows.duration < windows.every)) arguments.fail("duration must be shorter than every");
+  return windows;
+}
+
+using FaultParser = std::function<Fault(SpecArguments&)>;
+
+// Kind names and their parsers, in the order of docs/faults.md.
+const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
+  static const std::vector<std::pair<std::string, FaultParser>> table = {
+      {"stall", [](SpecArguments& a) -> Fault { return StallFault{parse_windows(a)}; }},
+      {"odom-gap", [](SpecArguments& a) -> Fault { return OdomGapFault{parse_windows(a)}; }},
+      {"wheel-scale", [](SpecArguments& a) -> Fault {
+         WheelScaleFault f;
+         f.translation = a.number("translation", f.translation, kFactor);
+         f.rotation = a.number("rotation", f.rotation, kFactor);
+         return f;
+       }},
+      {"heading-drift", [](SpecArguments& a) -> Fault {
+         return HeadingDriftFault{a.number("rate", HeadingDriftFault{}.rate_deg_per_m, {-90.0, 90.0})};
+       }},
+      {"scan-gap", [](SpecArguments& a) -> Fault { return ScanGapFault{parse_windows(a)}; }},
+      {"decimate", [](SpecArguments& a) -> Fault { return DecimateFault{a.count("k", DecimateFault{}.k, 1)}; }},
+      {"jitter", [](SpecArguments& a) -> Fault { return JitterFault{a.number("sigma", JitterFault{}.sigma, {0.0, 60.0})}; }},
+      {"duplicate", [](SpecArguments& a) -> Fault { return DuplicateFault{a.number("p", DuplicateFault{}.p, kProbability)}; }},
+      {"backwards", [](SpecArguments& a) -> Fault {
+         BackwardsFault f;
+         f.p = a.number("p", f.p, kProbability);
+         f.by = a.number("by", f.by, kPositive);
+         return f;
+       }},
+      {"range-noise", [](SpecArguments& a) -> Fault {
+         return RangeNoiseFault{a.number("sigma", RangeNoiseFault{}.sigma, {0.0, 100.0})};
+       }},
+      {"spurious-max", [](SpecArguments& a) -> Fault { return SpuriousMaxFault{a.number("p", SpuriousMaxFault{}.p, kProbability)}; }},
+      {"spurious-short", [](SpecArguments& a) -> Fault {
+         SpuriousShortFault f;
+         f.p = a.number("p", f.p, kProbability);
+         f.min = a.number("min", f.min, {0.0, kInf});
+         f.max = a.number("max", f.max, kPositive);
+         if (!(f.min < f.max)) a.fail("min must be less than max");
+         return f;
+       }},
+      {"beams", [](SpecArguments& a) -> Fault { return BeamsFault{a.count("k", BeamsFault{}.k, 1)}; }},
+      {"fov", [](SpecArguments& a) -> Fault { return FovFault{a.number("deg", FovFault{}.deg, {0.0, 360.0, true})}; }},
+      {"range-max", [](SpecArguments& a) -> Fault { return RangeMaxFault{a.number("max", RangeMaxFault{}.max, kPositive)}; }},
+  };
+  return table;
+}
+
+// The kind and the parameters of each fault, in spec order.
+using Parameters = std::pair<std::string, Changes>;
+
+Changes window_parameters(const FaultWindows& w) {
+  return {{"every", w.every}, {"start", w.start}, {"duration", w.duration}};
+}
+double as_number(std::size_t k) { return static_cast<double>(k); }
+
+Parameters parameters(const StallFault& f) { return {"stall", window_parameters(f.windows)}; }
+Parameters parameters(const OdomGapFault& f) { return {"odom-gap", window_parameters(f.windows)}; }
+Parameters parameters(const WheelScaleFault& f) {
+  return {"wheel-scale", {{"translation", f.translation}, {"rotation", f.rotation}}};
+}
+Parameters parameters(const HeadingDriftFault& f) { return {"heading-drift", {{"rate", f.rate_deg_per_m}}}; }
+Parameters parameters(const ScanGapFault& f) { return {"scan-gap", window_parameters(f.windows)}; }
+Parameters parameters(const DecimateFault& f) { return {"decimate", {{"k", as_number(f.k)}}}; }
+Parameters parameters(const JitterFault& f) { return {"jitter", {{"sigma", f.sigma}}}; }
+Parameters parameters(const DuplicateFault& f) { return {"duplicate", {{"p", f.p}}}; }
+Parameters parameters(const BackwardsFault& f) { return {"backwards", {{"p", f.p}, {"by", f.by}}}; }
+Parameters parameters(const RangeNoiseFault& f) { return {"range-noise", {{"sigma", f.sigma}}}; }
+Parameters parameters(const SpuriousMaxFault& f) { return {"spurious-max", {{"p", f.p}}}; }
+Parameters parameters(const SpuriousShortFault& f) {
+  return {"spurious-short", {{"p", f.p}, {"min", f.min}, {"max", f.max}}};
+}
+Parameters parameters(const BeamsFault& f) { return {"beams", {{"k", as_number(f.k)}}}; }
+Parameters parameters(const FovFault& f) { return {"fov", {{"deg", f.deg}}}; }
+Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.max}}}; }
+
+// ---------------------------------------------------------------------------------------------
+// Messages: stamps, odometry chains, laser lines.
+
+double stamp_of(const CarmenMessage& message) {
+  if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->scan.stamp;
+  if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.stamp;
+  return std::get<TruePoseMessage>(message).stamp;
+}
+
+enum Chain : std::size_t { kLaserChain = 0, kOdomChain = 1 };
+
+std::optional<Chain> chain_of(const CarmenMessage& message) {
+  if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+    return laser->has_poses ? std::optional<Chain>(kLaserChain) : std::nullopt;
+  }
+  return std::holds_alternative<OdometryMessage>(message) ? kOdomChain : kLaserChain;
+}
+
+SE2 odometry_pose(const CarmenMessage& message) {
+  if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->odom_pose;
+  if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.pose;
+  return std::get<TruePoseMessage>(message).odom_pose;
+}
+
+// Sets the odometry pose; a laser line's estimated pose follows it when it repeated it, and a
+// ROBOTLASER1's laser pose keeps its mounting on the robot.
+void set_odometry_pose(CarmenMessage& message, const SE2& pose) {
+  if (auto* laser = std::get_if<LaserMessage>(&message)) {
+    if (laser->type == "ROBOTLASER1") {
+      laser->laser_pose = pose * laser->scan.T_robot_sensor;
+    } else if (laser->laser_pose == laser->odom_pose) {
+      laser->laser_pose = pose;
+    }
+    laser->odom_pose = pose;
+  } else if (auto* odometry = std::get_if<OdometryMessage>(&message)) {
+    odometry->reading.pose = pose;
+  } else {
+    std::get<TruePoseMessage>(message).odom_pose = pose;
+  }
+}
+
+// m, the length of the laser chain's odometry path in file order.
+double laser_path_length(const Messages& messages) {
+  double length = 0.0;
+  std::optional<SE2> previous;
+  for (const CarmenMessage& message : messages) {
+    if (chain_of(message) != kLaserChain) continue;
+    const SE2 pose = odometry_pose(message);
+    if (previous) length += (pose.translation() - previous->translation()).norm();
+    previous = pose;
+  }
+  return length;
+}
+
+void remove_marked(Messages& messages, const std::vector<bool>& keep) {
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (!keep[i]) continue;
+    if (out != i) messages[out] = std::move(messages[i]);
+    ++out;
+  }
+  messages.resize(out);
+}
+
+template <typename Function>
+void for_each_laser(Messages& messages, Function&& function) {
+  for (CarmenMessage& message : messages) {
+    if (auto* laser = std::get_if<LaserMessage>(&message)) function(*laser);
+  }
+}
+
+// The window containing `stamp`, counted from the first, if any.
+class WindowClock {
+ public:
+  WindowClock(const Messages& messages, const FaultWindows& windows)
+      : t0_(messages.empty() ? 0.0 : stamp_of(messages.front())), windows_(windows) {}
+
+  std::optional<long> window(double stamp) const {
+    const double since_start = stamp - t0_ - windows_.start;
+    if (!(since_start >= 0.0)) return std::nullopt;
+    const double m = std::floor(since_start / windows_.every);
+    if (since_start - m * windows_.every >= windows_.duration) return std::nullopt;
+    return static_cast<long>(m);
+  }
+
+ private:
+  double t0_;
+  FaultWindows windows_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Odometry faults.
+
+struct HoldCounts {
+  std::set<long> windows;          // windows that froze or removed something
+  std::size_t frozen = 0;          // odometry poses changed
+  std::size_t removed = 0;         // ODOM lines removed
+  double max_catch_up_m = 0.0;     // largest jump of the laser chain after a window
+  double max_catch_up_rad = 0.0;
+};
+
+// Freezes each chain at its last pose before every window (stall); with `remove_odom`, the ODOM
+// lines inside the windows are removed instead of frozen (odom-gap).
+HoldCounts hold_odometry(Messages& messages, const FaultWindows& windows, bool remove_odom) {
+  struct ChainState {
+    std::optional<SE2> last_original;  // the chain's previous pose as logged
+    std::optional<long> window;        // the window the chain is in
+    SE2 held;
+  };
+  const WindowClock clock(messages, windows);
+  std::array<ChainState, 2> states;
+  std::vector<bool> keep(messages.size(), true);
+  HoldCounts counts;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    const std::optional<Chain> chain = chain_of(messages[i]);
+    if (!chain) continue;
+    ChainState& state = states[*chain];
+    const SE2 pose = odometry_pose(messages[i]);
+    const std::optional<long> window = clock.window(stamp_of(messages[i]));
+    if (!window) {
+      if (state.window && *chain == kLaserChain) {  // the catch-up jump
+        const SE2 jump = state.held.between(pose);
+        counts.max_catch_up_m = std::max(counts.max_catch_up_m, jump.translation().norm());
+        counts.max_catch_up_rad = std::max(counts.max_catch_up_rad, std::abs(jump.theta()));
+      }
+      state.window.reset();
+    } else if (remove_odom && *chain == kOdomChain) {
+      keep[i] = false;
+      ++counts.removed;
+      counts.windows.insert(*window);
+    } else {
+      if (state.window != window) state.held = state.last_original.value_or(pose);
+      state.window = window;
+      counts.windows.insert(*window);
+      if (!(state.held == pose)) {
+        set_odometry_pose(messages[i], state.held);
+        ++counts.frozen;
+      }
+    }
+    state.last_original = pose;
+  }
+  remove_marked(messages, keep);
+  return counts;
+}
+
+Changes hold_changes(const HoldCounts& counts, const char* windows_name) {
+  return {{windows_name, static_cast<double>(counts.windows.size())},
+          {"odometry_poses_frozen", static_cast<double>(counts.frozen)},
+          {"odom_lines_removed", static_cast<double>(counts.removed)},
+          {"max_catch_up_m", counts.max_catch_up_m},
+          {"max_catch_up_rad", counts.max_catch_up_rad}};
+}
+
+// Eq. (1): T'_k = T'_{k-1} * rule(T_{k-1}^-1 T_k) along each chain, from the log's first
+// odometry pose. Returns the number of poses changed.
+std::size_t reintegrate(Messages& messages, const std::function<SE2(const SE2&)>& rule) {
+  const auto first = std::find_if(messages.begin(), messages.end(), [](const CarmenMessage& m) { return chain_of(m).has_value(); });
+  if (!rule || first == messages.end()) return 0;
+  const SE2 anchor = odometry_pose(*first);
+  std::array<SE2, 2> previous_original = {anchor, anchor};
+  std::array<SE2, 2> previous_new = {anchor, anchor};
+  std::size_t changed = 0;
+  for (CarmenMessage& message : messages) {
+    const std::optional<Chain> chain = chain_of(message);
+    if (!chain) continue;
+    const SE2 pose = odometry_pose(message);
+    previous_new[*chain] = previous_new[*chain] * rule(previous_original[*chain].between(pose));
+    previous_original[*chain] = pose;
+    if (!(previous_new[*chain] == pose)) {
+      set_odometry_pose(message, previous_new[*chain]);
+      ++changed;
+    }
+  }
+  return changed;
+}
+
+Changes reintegrate_with_report(Messages& messages, const std::function<SE2(const SE2&)>& rule) {
+  const double before = laser_path_length(messages);
+  const std::size_t changed = reintegrate(messages, rule);
+  return {{"odometry_poses_changed", static_cast<double>(changed)},
+          {"laser_path_length_before_m", before},
+          {"laser_path_length_after_m", laser_path_length(messages)}};
+}
+
+Changes apply(const StallFault& fault, Messages& messages, Rng&) {
+  return hold_changes(hold_odometry(messages, fault.windows, false), "stalls");
+}
+
+Changes apply(const OdomGapFault& fault, Messages& messages, Rng&) {
+  return hold_changes(hold_odometry(messages, fault.windows, true), "gaps");
+}
+
+Changes apply(const WheelScaleFault& fault, Messages& messages, Rng&) {
+  if (fault.translation == 1.0 && fault.rotation == 1.0) return reintegrate_with_report(messages, nullptr);
+  return reintegrate_with_report(messages, [&fault](const SE2& increment) {
+    return SE2(Eigen::Vector2d(fault.translation * increment.translation()), fault.rotation * increment.theta());
+  });
+}
+
+Changes apply(const HeadingDriftFault& fault, Messages& messages, Rng&) {
+  if (fault.rate_deg_per_m == 0.0) return reintegrate_with_report(messages, nullptr);
+  const double rate = deg_to_rad(fault.rate_deg_per_m);  // rad per metre
+  return reintegrate_with_report(messages, [rate](const SE2& increment) {
+    return SE2(increment.translation(), increment.theta() + rate * increment.x());
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing faults.
+
+Changes apply(const ScanGapFault& fault, Messages& messages, Rng&) {
+  const WindowClock clock(messages, fault.windows);
+  std::vector<bool> keep(messages.size(), true);
+  std::set<long> windows;
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (!std::holds_alternative<LaserMessage>(messages[i])) continue;
+    if (const std::optional<long> window = clock.window(stamp_of(messages[i]))) {
+      keep[i] = false;
+      windows.insert(*window);
+      ++removed;
+    }
+  }
+  remove_marked(messages, keep);
+  return {{"gaps", static_cast<double>(windows.size())}, {"laser_lines_removed", static_cast<double>(removed)}};
+}
+
+Changes apply(const DecimateFault& fault, Messages& messages, Rng&) {
+  std::vector<bool> keep(messages.size(), true);
+  std::vector<std::pair<std::string, std::size_t>> seen;  // laser type -> lines so far
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    const auto* laser = std::get_if<LaserMessage>(&messages[i]);
+    if (laser == nullptr) continue;
+    auto it = std::find_if(seen.begin(), seen.end(), [&](const auto& s) { return s.first == laser->type; });
+    if (it == seen.end()) it = seen.insert(seen.end(), {laser->type, 0});
+    keep[i] = it->second++ % fault.k == 0;
+    removed += keep[i] ? 0 : 1;
+  }
+  remove_marked(messages, keep);
+  return {{"laser_lines_removed", static_cast<double>(removed)}};
+}
+
+Changes apply(const JitterFault& fault, Messages& messages, Rng& rng) {
+  std::size_t changed = 0;
+  double largest = 0.0;
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    const double shift = rng.gaussian(0.0, fault.sigma);
+    laser.scan.stamp += shift;
+    changed += shift != 0.0 ? 1 : 0;
+    largest = std::max(largest, std::abs(shift));
+  });
+  return {{"laser_stamps_changed", static_cast<double>(changed)}, {"max_shift_s", largest}};
+}
+
+Changes apply(const DuplicateFault& fault, Messages& messages, Rng& rng) {
+  Messages out;
+  out.reserve(messages.size());
+  std::size_t duplicated = 0;
+  for (CarmenMessage& message : messages) {
+    const bool twice = std::holds_alternative<LaserMessage>(message) && rng.bernoulli(fault.p);
+    out.push_back(std::move(message));
+    if (twice) {
+      out.push_back(out.back());
+      ++duplicated;
+    }
+  }
+  messages = std::move(out);
+  return {{"laser_lines_duplicated", static_cast<double>(duplicated)}};
+}
+
+Changes apply(const BackwardsFault& fault, Messages& messages, Rng& rng) {
+  std::size_t moved = 0;
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    if (!rng.bernoulli(fault.p)) return;
+    laser.scan.stamp -= fault.by;
+    ++moved;
+  });
+  return {{"laser_stamps_moved_back", static_cast<double>(moved)}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Range faults.
+
+bool is_valid_reading(const LaserScan& scan, double range) {
+  return std::isfinite(range) && range >= scan.range_min && range < scan.range_max;
+}
+
+// Calls change(scan, range) for every reading; it returns the new range. Counts the changes.
+template <typename Change>
+Changes change_readings(Messages& messages, Change&& change) {
+  std::size_t changed = 0;
+  std::size_t readings = 0;
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    for (double& range : laser.scan.ranges) {
+      const double new_range = change(laser.scan, range);
+      changed += new_range != range ? 1 : 0;
+      range = new_range;
+    }
+    readings += laser.scan.ranges.size();
+  });
+  return {{"readings_changed", static_cast<double>(changed)}, {"readings", static_cast<double>(readings)}};
+}
+
+Changes apply(const RangeNoiseFault& fault, Messages& messages, Rng& rng) {
+  return change_readings(messages, [&](const LaserScan& scan, double range) {
+    if (!is_valid_reading(scan, range)) return range;
+    return std::max(0.0, range + rng.gaussian(0.0, fault.sigma));
+  });
+}
+
+Changes apply(const SpuriousMaxFault& fault, Messages& messages, Rng& rng) {
+  return change_readings(messages, [&](const LaserScan& scan, double range) {
+    const bool spurious = rng.bernoulli(fault.p);  // drawn for every reading: the pattern ignores validity
+    return spurious && is_valid_reading(scan, range) ? scan.range_max : range;
+  });
+}
+
+Changes apply(const SpuriousShortFault& fault, Messages& messages, Rng& rng) {
+  return change_readings(messages, [&](const LaserScan&, double range) {
+    return rng.bernoulli(fault.p) ? rng.uniform(fault.min, fault.max) : range;
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry faults. FLASER/RLASER keep their first beam at -field_of_view / 2, the geometry that
+// PARAM lines declare (io/carmen_log.hpp).
+
+bool is_old_laser(const LaserMessage& laser) { return laser.type == "FLASER" || laser.type == "RLASER"; }
+
+// Keeps beams first, first + step, ... (up to `count` of them) and their intensities.
+void keep_beams(LaserScan& scan, std::size_t first, std::size_t step, std::size_t count) {
+  const auto select = [&](std::vector<double>& values) {
+    if (values.empty()) return;
+    for (std::size_t j = 0; j < count; ++j) values[j] = values[first + j * step];
+    values.resize(count);
+  };
+  scan.angle_min = scan.angle(first);
+  scan.angle_increment *= static_cast<double>(step);
+  select(scan.ranges);
+  select(scan.intensities);
+}
+
+Changes apply(const BeamsFault& fault, Messages& messages, Rng&) {
+  std::size_t removed = 0;
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    const std::size_t n = laser.scan.size();
+    const std::size_t kept = (n + fault.k - 1) / fault.k;
+    if (fault.k == 1 || n == 0) return;
+    keep_beams(laser.scan, 0, fault.k, kept);
+    removed += n - kept;
+  });
+  return {{"beams_removed", static_cast<double>(removed)}};
+}
+
+Changes apply(const FovFault& fault, Messages& messages, Rng&) {
+  constexpr double kTolerance = 1e-9;  // rad, a beam on the edge is kept
+  const double half = 0.5 * deg_to_rad(fault.deg);
+  std::size_t removed = 0;
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    LaserScan& scan = laser.scan;
+    const std::size_t n = scan.size();
+    std::size_t first = 0;
+    while (first < n && scan.angle(first) < -half - kTolerance) ++first;
+    std::size_t end = first;
+    while (end < n && scan.angle(end) <= half + kTolerance) ++end;
+    if (end == first) throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam of " + laser.type + " (line " + std::to_string(laser.line) + ")");
+    if (first == 0 && end == n) return;
+    keep_beams(scan, first, 1, end - first);
+    removed += n - (end - first);
+    if (!is_old_laser(laser)) {
+      laser.field_of_view = std::min(laser.field_of_view, deg_to_rad(fault.deg));
+    } else if (scan.angle_min < 0.0) {
+      laser.field_of_view = -2.0 * scan.angle_min;
+    } else {
+      throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam left of the axis of " + laser.type +
+                  " (line " + std::to_string(laser.line) + "); PARAM lines declare a first beam at -fov/2 < 0");
+    }
+  });
+  return {{"beams_removed", static_cast<double>(removed)}};
+}
+
+Changes apply(const RangeMaxFault& fault, Messages& messages, Rng&) {
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    if (fault.max > laser.scan.range_max) {
+      throw Error("range-max: max=" + format_number(fault.max) + " m is beyond the maximum range " +
+                  format_number(laser.scan.range_max) + " m of " + laser.type + " (line " + std::to_string(laser.line) + ")");
+    }
+  });
+  Changes changes = change_readings(messages, [&](const LaserScan&, double range) {
+    return range >= fault.max ? fault.max : range;
+  });
+  for_each_laser(messages, [&](LaserMessage& laser) { laser.scan.range_max = fault.max; });
+  return changes;
+}
+
+}  // namespace
+
+std::vector<std::string> fault_kinds() {
+  std::vector<std::string> kinds;
+  for (const auto& [name, parser] : fault_table()) kinds.push_back(name);
+  return kinds;
+}
+
+Fault parse_fault(std::string_view spec) {
+  const std::size_t colon = std::min(spec.find(':'), spec.size());
+  const std::string kind(spec.substr(0, colon));
+  const std::string_view parameters = colon < spec.size() ? spec.substr(colon + 1) : std::string_view();
+  const auto& table = fault_table();
+  const auto entry = std::find_if(table.begin(), table.end(), [&](const auto& e) { return e.first == kind; });
+  if (entry == table.end()) {
+    std::string kinds;
+    for (const std::string& name : fault_kinds()) kinds += (kinds.empty() ? "" : ", ") + name;
+    throw Error("--fault '" + std::string(spec) + "': unknown fault kind '" + kind + "' (kinds: " + kinds + ")");
+  }
+  SpecArguments arguments(std::string(spec), kind, parameters);
+  const Fault fault = entry->second(arguments);
+  arguments.finish();
+  return fault;
+}
+
+std::string fault_spec(const Fault& fault) {
+  const auto [kind, values] = std::visit([](const auto& f) { return parameters(f); }, fault);
+  std::string spec = kind;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    spec += (i == 0 ? ":" : ",") + values[i].first + "=" + format_number(values[i].second);
+  }
+  return spec;
+}
+
+FaultReport apply_fault(const Fault& fault, std::vector<CarmenMessage>& messages, Rng& rng) {
+  FaultReport report;
+  report.spec = fault_spec(fault);
+  report.changes = std::visit([&](const auto& f) { return apply(f, messages, rng); }, fault);
+  return report;
+}
+
+std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<CarmenMessage>& messages,
+                                      std::uint64_t seed) {
+  std::vector<FaultReport> reports;
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    Rng rng = Rng(seed).split(i);
+    reports.push_back(apply_fault(faults[i], messages, rng));
+  }
+  return reports;
+}
+
+}  // namespace slam2d

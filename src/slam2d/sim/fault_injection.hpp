@@ -1,0 +1,143 @@
+#pragma once
+// Fault injection for CARMEN logs: deterministic perturbations of a recorded log's odometry,
+// timing and laser scans, to measure how a method degrades (docs/faults.md has every fault, its
+// parameters, units and defaults, and why).
+//
+// A log is its messages in file order (std::vector<CarmenMessage>, as CarmenReader gives them).
+// The laser geometry travels in every LaserMessage (angles, field of view, maximum range,
+// mounting); write_carmen_log (io/carmen_log.hpp) declares it again with PARAM lines, so faults
+// that change it (beams, fov, range-max) read back exactly. Faults are applied in the order
+// given; fault i draws from its own stream Rng(seed).split(i), so a log, a list of faults and a
+// seed give the same messages on every platform, and adding a fault at the end does not change
+// what the earlier ones did.
+//
+// Odometry is sampled twice in a CARMEN log: by the ODOM lines, and by the odometry pose of every
+// laser line (and TRUEPOS). The faults treat them as two chains, each in file order: the laser
+// chain and the ODOM chain. (Neither one merged order is a smooth path: Intel's stamps step back
+// in file order, FR079's laser lines come after ODOM lines stamped later; each chain alone is
+// smooth. In the SLAM-corrected logs the two are not even the same odometry.) Increment-wise
+// faults re-integrate each chain from a common anchor, the log's first odometry pose, by the same
+// rule (Eq. 1 of docs/faults.md): T'_k = T'_{k-1} * rule(T_{k-1}^-1 * T_k), T'_anchor = T_anchor.
+// A laser line's estimated-pose triple follows its odometry pose when it repeats it (raw logs)
+// and is kept otherwise; ROBOTLASER1 keeps its laser-on-robot mounting.
+//
+// Time windows (stall, odom-gap, scan-gap) are [t0 + start + m every, t0 + start + m every +
+// duration), m = 0, 1, ..., with t0 the stamp of the log's first message.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "slam2d/core/rng.hpp"
+#include "slam2d/io/carmen.hpp"
+
+namespace slam2d {
+
+/// Repeating time windows, relative to the log's first stamp.
+struct FaultWindows {
+  double every = 60.0;     // s between window starts, > 0
+  double start = 60.0;     // s from the log's first stamp to the first window, >= 0 (parse default: every)
+  double duration = 1.2;   // s, in (0, every)
+};
+
+/// Odometry stalls, then catches up: in each window every odometry pose (laser lines, ODOM, TRUEPOS)
+/// holds its chain's last pose before the window; tv/rv are kept. After it, the true odometry.
+struct StallFault {
+  FaultWindows windows;
+};
+/// Odometry missing: ODOM lines in each window are removed; laser lines hold the odometry pose
+/// of the last laser line before the window, as a logger holds the last odometry received.
+struct OdomGapFault {
+  FaultWindows windows;
+};
+/// Wheel-scale error: increments scaled, re-integrated (Eq. 1). Factors of exactly 1 change nothing.
+struct WheelScaleFault {
+  double translation = 1.05;  // factor on the increments' translation, in (0, 10]
+  double rotation = 1.0;      // factor on the increments' rotation, in (0, 10]
+};
+/// Heading drift: each increment turns by an extra rate * (its signed forward travel), re-integrated (Eq. 1).
+struct HeadingDriftFault {
+  double rate_deg_per_m = 0.5;  // deg per metre travelled forward, |rate| <= 90
+};
+/// Scan dropouts: every laser line in each window is removed (odometry kept).
+struct ScanGapFault {
+  FaultWindows windows;
+};
+/// Keeps laser lines 0, k, 2k, ... of each laser type.
+struct DecimateFault {
+  std::size_t k = 2;  // >= 1
+};
+/// Laser stamps get Gaussian noise.
+struct JitterFault {
+  double sigma = 0.01;  // s, in [0, 60]
+};
+/// Each laser line is written twice with probability p.
+struct DuplicateFault {
+  double p = 0.01;  // in [0, 1]
+};
+/// With probability p a laser line's stamp moves back by `by` (out-of-order stamps).
+struct BackwardsFault {
+  double p = 0.01;  // in [0, 1]
+  double by = 0.5;  // s, > 0
+};
+/// Gaussian range noise on every valid reading, clamped at 0.
+struct RangeNoiseFault {
+  double sigma = 0.03;  // m, in [0, 100]
+};
+/// With probability p a valid reading becomes a no-return (the scan's maximum range).
+struct SpuriousMaxFault {
+  double p = 0.01;  // in [0, 1]
+};
+/// With probability p a reading becomes a short return, uniform in [min, max).
+struct SpuriousShortFault {
+  double p = 0.01;    // in [0, 1]
+  double min = 0.05;  // m, >= 0
+  double max = 0.5;   // m, > min
+};
+/// Fewer beams: keeps beams 0, k, 2k, ... (same first beam and field of view, k times the resolution).
+struct BeamsFault {
+  std::size_t k = 2;  // >= 1
+};
+/// Narrower field of view: keeps the beams within +-deg/2 of the sensor's axis.
+struct FovFault {
+  double deg = 90.0;  // deg, in (0, 360]
+};
+/// A shorter scanner: readings at or beyond `max` become no-returns (= max), and max is declared.
+struct RangeMaxFault {
+  double max = 30.0;  // m, > 0 and at most the log's maximum range
+};
+
+using Fault = std::variant<StallFault, OdomGapFault, WheelScaleFault, HeadingDriftFault, ScanGapFault,
+                           DecimateFault, JitterFault, DuplicateFault, BackwardsFault, RangeNoiseFault,
+                           SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault>;
+
+/// What one fault changed: its canonical spec and named counts or sizes (e.g. {"stalls", 22}).
+struct FaultReport {
+  std::string spec;
+  std::vector<std::pair<std::string, double>> changes;
+};
+
+/// The fault kinds, as spelled in specs ("stall", "odom-gap", ...).
+std::vector<std::string> fault_kinds();
+
+/// Parses "KIND[:key=value,...]". Throws Error naming the spec on an unknown kind or key, a
+/// repeated key, a value that is not a number (or not an integer where one is needed) or one out
+/// of its range.
+Fault parse_fault(std::string_view spec);
+
+/// The canonical spec of a fault, with every parameter: parse_fault(fault_spec(f)) gives f back.
+std::string fault_spec(const Fault& fault);
+
+/// Applies one fault to the messages (file order), drawing from `rng`. Throws Error when the
+/// fault cannot apply to a scan (fov keeping no beam, range-max beyond the scan's maximum range).
+FaultReport apply_fault(const Fault& fault, std::vector<CarmenMessage>& messages, Rng& rng);
+
+/// Applies the faults in order, fault i with Rng(seed).split(i).
+std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<CarmenMessage>& messages,
+                                      std::uint64_t seed);
+
+}  // namespace slam2d

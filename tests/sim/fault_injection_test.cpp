@@ -1,0 +1,496 @@
+// Fault injection (sim/fault_injection.hpp) on a simulated office run: each fault changes what it
+// says and nothing else (stall windows, removed lines, re-integrated odometry against closed
+// forms, every third scan), seeds give identical or different logs, bad specs are refused, and
+// geometry faults read back through CarmenReader with the kept beams' original angles.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/carmen_log.hpp"
+#include "slam2d/sim/fault_injection.hpp"
+#include "support/simulated_office.hpp"
+#include "support/test_support.hpp"
+
+namespace slam2d {
+namespace {
+
+using Messages = std::vector<CarmenMessage>;
+constexpr double kPi = std::numbers::pi;
+
+// 150 s of the office: ODOM at 20 Hz, FLASER + TRUEPOS at 10 Hz, stamps from 0.
+const Messages& office() { return test::simulated_office(150.0, 3).messages; }
+
+Messages perturbed(const std::string& spec, std::uint64_t seed = 1, Messages messages = office()) {
+  apply_faults({parse_fault(spec)}, messages, seed);
+  return messages;
+}
+
+FaultReport report_of(const std::string& spec, Messages& messages, std::uint64_t seed = 1) {
+  return apply_faults({parse_fault(spec)}, messages, seed).front();
+}
+
+double change(const FaultReport& report, const std::string& key) {
+  for (const auto& [name, value] : report.changes) {
+    if (name == key) return value;
+  }
+  ADD_FAILURE() << "no change '" << key << "' in " << report.spec;
+  return -1.0;
+}
+
+template <typename T>
+std::vector<T> of_type(const Messages& messages) {
+  std::vector<T> result;
+  for (const CarmenMessage& m : messages) {
+    if (const T* typed = std::get_if<T>(&m)) result.push_back(*typed);
+  }
+  return result;
+}
+
+// Window m of "every=20,duration=1.2" from t0 = 0 (the office run's first stamp): [20 (m + 1), 20 (m + 1) + 1.2).
+bool in_window(double stamp) {
+  const double since = stamp - 20.0;
+  return since >= 0.0 && since - 20.0 * std::floor(since / 20.0) < 1.2;
+}
+
+double path_length(const std::vector<SE2>& poses) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < poses.size(); ++i) length += (poses[i].translation() - poses[i - 1].translation()).norm();
+  return length;
+}
+
+std::vector<SE2> laser_odometry(const Messages& messages) {
+  std::vector<SE2> poses;
+  for (const LaserMessage& laser : of_type<LaserMessage>(messages)) poses.push_back(laser.odom_pose);
+  return poses;
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Specs.
+
+TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
+  EXPECT_EQ(fault_spec(parse_fault("stall")), "stall:every=60,start=60,duration=1.2");
+  EXPECT_EQ(fault_spec(parse_fault("stall:every=30")), "stall:every=30,start=30,duration=1.2");  // start = every
+  EXPECT_EQ(fault_spec(parse_fault("stall:duration=3,start=0")), "stall:every=60,start=0,duration=3");
+  EXPECT_EQ(fault_spec(parse_fault("wheel-scale")), "wheel-scale:translation=1.05,rotation=1");
+  EXPECT_EQ(fault_spec(parse_fault("range-max:max=5.6")), "range-max:max=5.6");
+  EXPECT_EQ(std::get<BeamsFault>(parse_fault("beams:k=3")).k, 3u);
+  EXPECT_EQ(std::get<HeadingDriftFault>(parse_fault("heading-drift:rate=-0.25")).rate_deg_per_m, -0.25);
+  for (const std::string& kind : fault_kinds()) {  // every kind parses with its defaults and round-trips
+    const std::string spec = fault_spec(parse_fault(kind));
+    EXPECT_EQ(spec.rfind(kind + ":", 0), 0u) << spec;
+    EXPECT_EQ(fault_spec(parse_fault(spec)), spec);
+  }
+  EXPECT_EQ(fault_kinds().size(), 15u);
+}
+
+TEST(FaultSpec, BadSpecsAreRefusedWithAReason) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"wobble", "unknown fault kind 'wobble'"},
+      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, wheel-scale, heading-drift, scan-gap,"},
+      {"stall:every=60,lenght=2", "unknown key 'lenght' for stall (keys: every, start, duration)"},
+      {"stall:every=abc", "every is not a number: 'abc'"},
+      {"stall:every=-5", "every=-5 is out of range (0, inf)"},
+      {"stall:every=10,duration=10", "duration must be shorter than every"},
+      {"stall:every=1,every=2", "key 'every' given twice"},
+      {"stall:every", "expected key=value, got 'every'"},
+      {"stall:every=60,", "expected key=value, got ''"},
+      {"decimate:k=2.5", "k is not an integer: '2.5'"},
+      {"decimate:k=0", "k=0 must be >= 1"},
+      {"duplicate:p=1.5", "p=1.5 is out of range [0, 1]"},
+      {"jitter:sigma=nan", "sigma is not a number: 'nan'"},
+      {"spurious-short:min=0.5,max=0.1", "min must be less than max"},
+      {"fov:deg=0", "deg=0 is out of range (0, 360]"},
+      {"wheel-scale:translation=0", "translation=0 is out of range (0, 10]"},
+  };
+  for (const auto& [spec, reason] : cases) {
+    try {
+      parse_fault(spec);
+      ADD_FAILURE() << "accepted " << spec;
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("--fault '" + spec + "': ", 0), 0u) << what;
+      EXPECT_NE(what.find(reason), std::string::npos) << what;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Odometry faults.
+
+TEST(FaultInjection, StallHoldsTheOdometryInEachWindowThenCatchesUp) {
+  Messages messages = office();
+  const FaultReport report = report_of("stall:every=20,duration=1.2", messages);
+  const std::vector<LaserMessage> before = of_type<LaserMessage>(office());
+  const std::vector<LaserMessage> after = of_type<LaserMessage>(messages);
+  ASSERT_EQ(before.size(), after.size());
+  std::size_t frozen = 0;
+  for (std::size_t i = 1; i < after.size(); ++i) {
+    const bool inside = in_window(after[i].scan.stamp);
+    if (!inside) {
+      EXPECT_EQ(after[i].odom_pose, before[i].odom_pose) << i;  // untouched, and the true pose right after
+      continue;
+    }
+    // Held: the pose of the last scan before the window (TRUEPOS at the same stamp shares it).
+    std::size_t last_outside = i;
+    while (in_window(before[last_outside].scan.stamp)) --last_outside;
+    EXPECT_EQ(after[i].odom_pose, before[last_outside].odom_pose) << i;
+    EXPECT_EQ(after[i].laser_pose, after[i].odom_pose) << i;  // the repeated triple follows
+    frozen += after[i].odom_pose == before[i].odom_pose ? 0 : 1;
+    EXPECT_EQ(after[i].scan.ranges, before[i].scan.ranges);
+  }
+  EXPECT_EQ(change(report, "stalls"), 7.0);  // windows at 20, 40, ..., 140 s
+  EXPECT_GE(frozen, 7u * 12u * 9u / 10u);     // 12 scans a window, the robot moving almost always
+  // The catch-up: from the held pose to the true one at the first scan after each window.
+  double largest_jump = 0.0;
+  for (std::size_t i = 1; i < after.size(); ++i) {
+    if (in_window(after[i - 1].scan.stamp) && !in_window(after[i].scan.stamp)) {
+      largest_jump = std::max(largest_jump, (after[i].odom_pose.translation() - after[i - 1].odom_pose.translation()).norm());
+    }
+  }
+  EXPECT_NEAR(change(report, "max_catch_up_m"), largest_jump, 1e-12);
+  EXPECT_GT(largest_jump, 0.6);  // about 1.3 s at 0.6 m/s
+  // ODOM lines are frozen too, and kept.
+  const std::vector<OdometryMessage> odom_before = of_type<OdometryMessage>(office());
+  const std::vector<OdometryMessage> odom_after = of_type<OdometryMessage>(messages);
+  ASSERT_EQ(odom_before.size(), odom_after.size());
+  for (std::size_t i = 1; i < odom_after.size(); ++i) {
+    if (in_window(odom_after[i].reading.stamp) && in_window(odom_after[i - 1].reading.stamp)) {
+      EXPECT_EQ(odom_after[i].reading.pose, odom_after[i - 1].reading.pose) << i;
+    } else if (!in_window(odom_after[i].reading.stamp)) {
+      EXPECT_EQ(odom_after[i].reading.pose, odom_before[i].reading.pose) << i;
+    }
+    EXPECT_EQ(odom_after[i].reading.tv, odom_before[i].reading.tv);
+  }
+}
+
+TEST(FaultInjection, OdomGapRemovesOdomLinesAndHoldsTheLaserOdometry) {
+  Messages messages = office();
+  const FaultReport report = report_of("odom-gap:every=20,duration=1.2", messages);
+  std::size_t removed = 0;
+  for (const OdometryMessage& odom : of_type<OdometryMessage>(office())) removed += in_window(odom.reading.stamp) ? 1 : 0;
+  for (const OdometryMessage& odom : of_type<OdometryMessage>(messages)) EXPECT_FALSE(in_window(odom.reading.stamp));
+  EXPECT_EQ(of_type<OdometryMessage>(messages).size() + removed, of_type<OdometryMessage>(office()).size());
+  EXPECT_EQ(change(report, "odom_lines_removed"), static_cast<double>(removed));
+  EXPECT_GE(removed, 7u * 24u);
+  // The lasers are all there, their odometry held as by stall.
+  Messages stalled = perturbed("stall:every=20,duration=1.2");
+  EXPECT_EQ(laser_odometry(messages), laser_odometry(stalled));
+}
+
+TEST(FaultInjection, WheelScaleOfOneChangesNothingBitForBit) {
+  Messages messages = office();
+  const FaultReport report = report_of("wheel-scale:translation=1,rotation=1", messages);
+  EXPECT_EQ(change(report, "odometry_poses_changed"), 0.0);
+  EXPECT_EQ(laser_odometry(messages), laser_odometry(office()));
+  // A factor next to 1 moves poses by next to nothing: the rule is continuous at 1.
+  const Messages near_one = perturbed("wheel-scale:translation=1.000000001");
+  const std::vector<SE2> a = laser_odometry(near_one), b = laser_odometry(office());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].is_approx(b[i], 1e-6)) << i;
+}
+
+TEST(FaultInjection, WheelScaleStretchesThePathAboutTheFirstPose) {
+  const Messages messages = perturbed("wheel-scale:translation=1.05");
+  const SE2 anchor = std::get<OdometryMessage>(office().front()).reading.pose;
+  const std::vector<SE2> before = laser_odometry(office()), after = laser_odometry(messages);
+  EXPECT_NEAR(path_length(after) / path_length(before), 1.05, 1e-9);
+  for (std::size_t i = 0; i < after.size(); ++i) {  // closed form: p' = p0 + 1.05 (p - p0), same heading
+    const Eigen::Vector2d expected = anchor.translation() + 1.05 * (before[i].translation() - anchor.translation());
+    EXPECT_NEAR((after[i].translation() - expected).norm(), 0.0, 1e-9) << i;
+    EXPECT_NEAR(angle_difference(after[i].theta(), before[i].theta()), 0.0, 1e-9) << i;
+  }
+  // The ODOM chain gets the same closed form: both chains stay one odometry.
+  const auto odom_before = of_type<OdometryMessage>(office()), odom_after = of_type<OdometryMessage>(messages);
+  for (std::size_t i = 0; i < odom_after.size(); ++i) {
+    const Eigen::Vector2d expected = anchor.translation() + 1.05 * (odom_before[i].reading.pose.translation() - anchor.translation());
+    EXPECT_NEAR((odom_after[i].reading.pose.translation() - expected).norm(), 0.0, 1e-9) << i;
+  }
+}
+
+// Total heading change along a pose sequence, unwrapped.
+double turned(const std::vector<SE2>& poses) {
+  double total = 0.0;
+  for (std::size_t i = 1; i < poses.size(); ++i) total += angle_difference(poses[i].theta(), poses[i - 1].theta());
+  return total;
+}
+
+// The rotation of every increment along a pose sequence.
+std::vector<double> turns(const std::vector<SE2>& poses) {
+  std::vector<double> result;
+  for (std::size_t i = 1; i < poses.size(); ++i) result.push_back(poses[i - 1].between(poses[i]).theta());
+  return result;
+}
+
+TEST(FaultInjection, RotationScaleAndHeadingDriftTurnAsStated) {
+  const std::vector<SE2> before = laser_odometry(office());
+  const std::vector<double> turns_before = turns(before);
+  const std::vector<double> turns_after = turns(laser_odometry(perturbed("wheel-scale:translation=1,rotation=1.1")));
+  double turned_abs = 0.0;
+  for (std::size_t i = 0; i < turns_before.size(); ++i) {
+    EXPECT_NEAR(turns_after[i], 1.1 * turns_before[i], 1e-9) << i;
+    turned_abs += std::abs(turns_before[i]);
+  }
+  EXPECT_GT(turned_abs, 2.0 * kPi);
+  const double turned_before = turned(before);
+
+  // Drift: rate x (signed forward travel of each increment), here 1 deg/m.
+  double forward = 0.0;
+  for (std::size_t i = 1; i < before.size(); ++i) forward += before[i - 1].between(before[i]).x();
+  const std::vector<SE2> drifted = laser_odometry(perturbed("heading-drift:rate=1"));
+  EXPECT_NEAR(turned(drifted) - turned_before, deg_to_rad(1.0) * forward, 1e-6);
+  EXPECT_GT(forward, 50.0);
+  // Laser and ODOM chains agree where they sample the same instant (an ODOM at every scan's stamp).
+  const Messages drifted_log = perturbed("heading-drift:rate=1");
+  const auto lasers = of_type<LaserMessage>(drifted_log);
+  const auto odoms = of_type<OdometryMessage>(drifted_log);
+  std::size_t compared = 0;
+  for (const LaserMessage& laser : lasers) {
+    const auto odom = std::find_if(odoms.begin(), odoms.end(), [&](const OdometryMessage& o) {
+      return std::abs(o.reading.stamp - laser.scan.stamp) < 1e-9;
+    });
+    if (odom == odoms.end()) continue;
+    EXPECT_TRUE(odom->reading.pose.is_approx(laser.odom_pose, 0.01)) << laser.scan.stamp;
+    ++compared;
+  }
+  EXPECT_GT(compared, lasers.size() / 2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing faults.
+
+TEST(FaultInjection, ScanGapRemovesOnlyTheLaserLinesInTheWindows) {
+  Messages messages = office();
+  const FaultReport report = report_of("scan-gap:every=20,duration=1.2", messages);
+  std::vector<double> expected;
+  for (const LaserMessage& laser : of_type<LaserMessage>(office())) {
+    if (!in_window(laser.scan.stamp)) expected.push_back(laser.scan.stamp);
+  }
+  std::vector<double> kept;
+  for (const LaserMessage& laser : of_type<LaserMessage>(messages)) kept.push_back(laser.scan.stamp);
+  EXPECT_EQ(kept, expected);
+  EXPECT_EQ(change(report, "laser_lines_removed"), static_cast<double>(of_type<LaserMessage>(office()).size() - kept.size()));
+  EXPECT_EQ(change(report, "gaps"), 7.0);
+  EXPECT_EQ(of_type<OdometryMessage>(messages).size(), of_type<OdometryMessage>(office()).size());
+}
+
+TEST(FaultInjection, DecimateKeepsExactlyEveryThirdScan) {
+  const auto before = of_type<LaserMessage>(office());
+  const auto after = of_type<LaserMessage>(perturbed("decimate:k=3"));
+  ASSERT_EQ(after.size(), (before.size() + 2) / 3);
+  for (std::size_t j = 0; j < after.size(); ++j) {
+    EXPECT_EQ(after[j].scan.stamp, before[3 * j].scan.stamp);
+    EXPECT_EQ(after[j].scan.ranges, before[3 * j].scan.ranges);
+  }
+  EXPECT_EQ(of_type<OdometryMessage>(perturbed("decimate:k=3")).size(), of_type<OdometryMessage>(office()).size());
+}
+
+TEST(FaultInjection, JitterDuplicateAndBackwardsChangeStampsAsStated) {
+  const auto before = of_type<LaserMessage>(office());
+  const auto jittered = of_type<LaserMessage>(perturbed("jitter:sigma=0.01"));
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < before.size(); ++i) sum_sq += std::pow(jittered[i].scan.stamp - before[i].scan.stamp, 2);
+  EXPECT_NEAR(std::sqrt(sum_sq / static_cast<double>(before.size())), 0.01, 0.001);
+
+  const auto doubled = of_type<LaserMessage>(perturbed("duplicate:p=0.2"));
+  const double copies = static_cast<double>(doubled.size() - before.size());
+  EXPECT_NEAR(copies / static_cast<double>(before.size()), 0.2, 0.03);
+  std::size_t repeats = 0;
+  for (std::size_t i = 1; i < doubled.size(); ++i) repeats += doubled[i].scan.stamp == doubled[i - 1].scan.stamp ? 1 : 0;
+  EXPECT_EQ(static_cast<double>(repeats), copies);
+
+  const auto moved = of_type<LaserMessage>(perturbed("backwards:p=0.1,by=0.5"));
+  std::size_t back = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const double shift = before[i].scan.stamp - moved[i].scan.stamp;
+    EXPECT_TRUE(shift == 0.0 || std::abs(shift - 0.5) < 1e-9) << i;
+    back += shift != 0.0 ? 1 : 0;
+  }
+  EXPECT_NEAR(static_cast<double>(back) / static_cast<double>(before.size()), 0.1, 0.02);
+}
+
+TEST(FaultInjection, SameSeedSameLogOtherSeedOtherLog) {
+  test::TempDir dir;
+  const std::vector<Fault> faults = {parse_fault("stall:every=20"), parse_fault("jitter"), parse_fault("range-noise"),
+                                     parse_fault("spurious-short:p=0.02"), parse_fault("duplicate:p=0.05")};
+  const auto write = [&](std::uint64_t seed, const std::string& name) {
+    Messages messages = office();
+    apply_faults(faults, messages, seed);
+    write_carmen_log(dir.file(name), {"perturbed"}, messages);
+    return file_bytes(dir.file(name));
+  };
+  const std::string a = write(7, "a.clf"), b = write(7, "b.clf"), c = write(8, "c.clf");
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+  EXPECT_GT(a.size(), 1000000u);
+  // A deterministic fault does not depend on the seed.
+  Messages s1 = perturbed("decimate:k=2", 1), s2 = perturbed("decimate:k=2", 2);
+  EXPECT_EQ(laser_odometry(s1), laser_odometry(s2));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Range faults.
+
+TEST(FaultInjection, RangeNoiseSpuriousMaxAndShortChangeReadingsAsStated) {
+  const auto before = of_type<LaserMessage>(office());
+  const auto noisy = of_type<LaserMessage>(perturbed("range-noise:sigma=0.05"));
+  const auto maxed = of_type<LaserMessage>(perturbed("spurious-max:p=0.1"));
+  const auto shorts = of_type<LaserMessage>(perturbed("spurious-short:p=0.1,min=0.05,max=0.5"));
+  double sum_sq = 0.0;
+  std::size_t valid = 0, became_max = 0, became_short = 0, readings = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const LaserScan& scan = before[i].scan;
+    for (std::size_t k = 0; k < scan.size(); ++k) {
+      ++readings;
+      EXPECT_GE(noisy[i].scan.ranges[k], 0.0);
+      if (scan.is_valid(k)) {
+        ++valid;
+        sum_sq += std::pow(noisy[i].scan.ranges[k] - scan.ranges[k], 2);
+        became_max += maxed[i].scan.ranges[k] != scan.ranges[k] ? 1 : 0;
+        if (maxed[i].scan.ranges[k] != scan.ranges[k]) {
+          EXPECT_EQ(maxed[i].scan.ranges[k], scan.range_max);
+        }
+      } else {
+        EXPECT_EQ(noisy[i].scan.ranges[k], scan.ranges[k]);  // no-returns stay no-returns
+        EXPECT_EQ(maxed[i].scan.ranges[k], scan.ranges[k]);
+      }
+      if (shorts[i].scan.ranges[k] != scan.ranges[k]) {
+        ++became_short;
+        EXPECT_GE(shorts[i].scan.ranges[k], 0.05);
+        EXPECT_LT(shorts[i].scan.ranges[k], 0.5);
+      }
+    }
+  }
+  EXPECT_NEAR(std::sqrt(sum_sq / static_cast<double>(valid)), 0.05, 0.001);
+  EXPECT_NEAR(static_cast<double>(became_max) / static_cast<double>(valid), 0.1, 0.005);
+  EXPECT_NEAR(static_cast<double>(became_short) / static_cast<double>(readings), 0.1, 0.005);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry faults, read back through CarmenReader.
+
+Messages read_all(const std::string& path) {
+  CarmenReader reader(path);
+  Messages messages;
+  while (auto message = reader.next()) messages.push_back(std::move(*message));
+  return messages;
+}
+
+// A raw log as a CARMEN logger writes it (no PARAM lines), read back: the reader's conventional
+// geometry for n beams. Ranges 0.5 .. 40 m and a few 81.9 m no-returns.
+Messages raw_log(const test::TempDir& dir, std::size_t n, const std::string& type = "FLASER") {
+  const std::string path = dir.file("raw" + std::to_string(n) + type + ".clf");
+  CarmenWriter writer(path);
+  for (int s = 0; s < 3; ++s) {
+    LaserMessage laser;
+    laser.type = type;
+    laser.scan.stamp = 10.0 + 0.2 * s;
+    for (std::size_t k = 0; k < n; ++k) laser.scan.ranges.push_back(k % 17 == 0 ? 81.9 : 0.5 + 0.25 * static_cast<double>((k * 7 + s) % 160));
+    laser.odom_pose = laser.laser_pose = SE2(0.1 * s, 0.0, 0.01 * s);
+    writer.write(laser);
+  }
+  writer.commit();
+  return read_all(path);
+}
+
+TEST(FaultInjection, GeometryFaultsReadBackWithTheKeptBeamsAngles) {
+  test::TempDir dir;
+  for (const std::size_t n : {180u, 181u, 360u, 361u}) {
+    for (const std::string type : {"FLASER", "RLASER"}) {
+      const Messages original = raw_log(dir, n, type);
+      const LaserScan& scan = std::get<LaserMessage>(original.front()).scan;
+      struct Case {
+        std::string spec;
+        std::size_t first, step;  // kept beams: first, first + step, ...
+      };
+      const double resolution_deg = rad_to_deg(scan.angle_increment);
+      for (const Case& c : {Case{"beams:k=2", 0, 2}, Case{"beams:k=3", 0, 3},
+                            Case{"fov:deg=90", static_cast<std::size_t>(std::lround(45.0 / resolution_deg)), 1},
+                            Case{"fov:deg=100.3", static_cast<std::size_t>(std::ceil(39.85 / resolution_deg)), 1}}) {
+        SCOPED_TRACE(type + " " + std::to_string(n) + " " + c.spec);
+        Messages messages = original;
+        apply_faults({parse_fault(c.spec), parse_fault("range-max:max=5.6")}, messages, 1);
+        const std::string path = dir.file("out.clf");
+        write_carmen_log(path, {}, messages);
+        const Messages back = read_all(path);
+        ASSERT_EQ(back.size(), original.size());
+        for (std::size_t s = 0; s < back.size(); ++s) {
+          const LaserScan& in = std::get<LaserMessage>(original[s]).scan;
+          const LaserScan& out = std::get<LaserMessage>(back[s]).scan;
+          const LaserScan& written = std::get<LaserMessage>(messages[s]).scan;
+          EXPECT_EQ(out.ranges, written.ranges);  // exact numbers
+          EXPECT_EQ(out.range_max, 5.6);
+          EXPECT_EQ(out.T_robot_sensor, in.T_robot_sensor);
+          ASSERT_GT(out.size(), 0u);
+          for (std::size_t j = 0; j < out.size(); ++j) {
+            const std::size_t k = c.first + j * c.step;
+            ASSERT_LT(k, in.size());
+            EXPECT_NEAR(out.angle(j), in.angle(k), 1e-12) << j;
+            EXPECT_EQ(out.ranges[j], in.ranges[k] >= 5.6 ? 5.6 : in.ranges[k]) << j;
+            EXPECT_LE(std::abs(out.angle(j)), 0.5 * deg_to_rad(c.step == 1 ? std::stod(c.spec.substr(8)) : 360.0) + 1e-9);
+          }
+          if (c.step == 1) {  // the kept beams are the ones within +-deg/2, all of them
+            const double half = 0.5 * deg_to_rad(std::stod(c.spec.substr(8)));
+            std::size_t inside = 0;
+            for (std::size_t k = 0; k < in.size(); ++k) inside += std::abs(in.angle(k)) <= half + 1e-9 ? 1 : 0;
+            EXPECT_EQ(out.size(), inside);
+          } else {
+            EXPECT_EQ(out.size(), (in.size() + c.step - 1) / c.step);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(FaultInjection, GeometryFaultsRefuseWhatTheyCannotDo) {
+  test::TempDir dir;
+  Messages messages = raw_log(dir, 180);
+  EXPECT_THROW(perturbed("range-max:max=100", 1, messages), Error);  // the log's maximum is 80 m
+  EXPECT_THROW(perturbed("fov:deg=0.5", 1, messages), Error);        // no beam within +-0.25 deg left of the axis
+}
+
+TEST(CarmenLog, PassThroughKeepsTheGeometryExactly) {
+  test::TempDir dir;
+  for (const std::size_t n : {180u, 361u}) {
+    const Messages original = raw_log(dir, n);
+    write_carmen_log(dir.file("copy.clf.gz"), {"a copy"}, original);
+    const Messages back = read_all(dir.file("copy.clf.gz"));
+    ASSERT_EQ(back.size(), original.size());
+    for (std::size_t s = 0; s < back.size(); ++s) {
+      const auto& in = std::get<LaserMessage>(original[s]);
+      const auto& out = std::get<LaserMessage>(back[s]);
+      EXPECT_EQ(out.scan.angle_min, in.scan.angle_min);  // bit for bit
+      EXPECT_EQ(out.scan.angle_increment, in.scan.angle_increment);
+      EXPECT_EQ(out.field_of_view, in.field_of_view);
+      EXPECT_EQ(out.scan.range_max, in.scan.range_max);
+      EXPECT_EQ(out.scan.ranges, in.scan.ranges);
+      EXPECT_EQ(out.odom_pose, in.odom_pose);
+    }
+  }
+}
+
+TEST(CarmenLog, RefusesAGeometryPARAMLinesCannotDeclare) {
+  test::TempDir dir;
+  Messages messages = raw_log(dir, 180);
+  std::get<LaserMessage>(messages[1]).scan.angle_min += 0.1;
+  EXPECT_THROW(write_carmen_log(dir.file("bad.clf"), {}, messages), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.clf")));
+}
+
+}  // namespace
+}  // namespace slam2d
