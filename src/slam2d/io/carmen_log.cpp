@@ -34,7 +34,7 @@ double degrees_reading_back(double radians) {
 
 }  // namespace
 
-OldLaserGeometry old_laser_geometry(const LaserMessage& message) {
+DeclaredLaserGeometry declared_laser_geometry(const LaserMessage& message) {
   const LaserScan& scan = message.scan;
   if (!(std::abs(scan.angle_min + 0.5 * message.field_of_view) <= kAngleTolerance)) {
     throw Error(message.type + " (line " + std::to_string(message.line) + "): first beam at " +
@@ -48,7 +48,7 @@ OldLaserGeometry old_laser_geometry(const LaserMessage& message) {
           .T_robot_sensor = scan.T_robot_sensor};
 }
 
-void write_old_laser_params(CarmenWriter& writer, const OldLaserGeometry& geometry, bool rear, double stamp) {
+void write_old_laser_params(CarmenWriter& writer, const DeclaredLaserGeometry& geometry, bool rear, double stamp) {
   const std::string laser = rear ? "laser_rear_laser_" : "laser_front_laser_";
   const std::string robot = rear ? "robot_rear_laser_max" : "robot_front_laser_max";
   const std::string mount = rear ? "robot_rearlaser_" : "robot_frontlaser_";
@@ -66,12 +66,12 @@ void write_carmen_log(const std::string& path, const std::vector<std::string>& c
                       const std::vector<CarmenMessage>& messages) {
   CarmenWriter writer(path);
   for (const std::string& comment : comments) writer.write_comment(comment);
-  std::optional<OldLaserGeometry> declared[2];  // front, rear
+  std::optional<DeclaredLaserGeometry> declared[2];  // front, rear
   for (const CarmenMessage& message : messages) {
     if (const auto* laser = std::get_if<LaserMessage>(&message)) {
       const bool rear = laser->type == "RLASER";
       if (rear || laser->type == "FLASER") {
-        const OldLaserGeometry geometry = old_laser_geometry(*laser);
+        const DeclaredLaserGeometry geometry = declared_laser_geometry(*laser);
         if (declared[rear] != geometry) write_old_laser_params(writer, geometry, rear, laser->scan.stamp);
         declared[rear] = geometry;
       }

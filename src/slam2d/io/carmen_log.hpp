@@ -17,21 +17,21 @@
 namespace slam2d {
 
 /// What PARAM lines declare for the old front (FLASER) or rear (RLASER) laser.
-struct OldLaserGeometry {
+struct DeclaredLaserGeometry {
   double field_of_view = 0.0;    // rad
   double angle_increment = 0.0;  // rad
   double range_max = 0.0;        // m
   SE2 T_robot_sensor;            // the mounting (the rear laser's yaw includes its pi)
 
-  bool operator==(const OldLaserGeometry& other) const = default;
+  bool operator==(const DeclaredLaserGeometry& other) const = default;
 };
 
 /// The geometry of a FLASER/RLASER message. Throws Error (naming the message's line) when its
 /// first beam is not at -field_of_view / 2, which PARAM lines cannot express.
-OldLaserGeometry old_laser_geometry(const LaserMessage& message);
+DeclaredLaserGeometry declared_laser_geometry(const LaserMessage& message);
 
 /// Writes the PARAM lines declaring `geometry` for the front (rear = false) or rear laser, at `stamp`.
-void write_old_laser_params(CarmenWriter& writer, const OldLaserGeometry& geometry, bool rear, double stamp);
+void write_old_laser_params(CarmenWriter& writer, const DeclaredLaserGeometry& geometry, bool rear, double stamp);
 
 /// Writes a whole log atomically (gzip when the path ends in .gz): `comments` as '#' lines, then
 /// `messages` in order. Before the first FLASER (RLASER), and again before any whose geometry
