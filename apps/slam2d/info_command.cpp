@@ -60,9 +60,7 @@ JsonObject geometry_json(const OldLaserGeometry& geometry) {
   json.add("readings_at_range_max_fraction",
            geometry.readings > 0 ? static_cast<double>(geometry.readings_at_range_max) / static_cast<double>(geometry.readings)
                                  : 0.0);
-  JsonObject warnings;
-  for (std::size_t k = 0; k < geometry.warnings.size(); ++k) warnings.add(std::to_string(k + 1), geometry.warnings[k]);
-  json.add("warnings", warnings);
+  json.add("warnings", geometry.warnings);
   return json;
 }
 

@@ -59,6 +59,15 @@ JsonObject& JsonObject::add(std::string_view key, std::string_view value) {
 JsonObject& JsonObject::add(std::string_view key, const std::optional<double>& value) {
   return value ? add(key, *value) : add_null(key);
 }
+JsonObject& JsonObject::add(std::string_view key, const std::vector<std::string>& values) {
+  std::string encoded = "[";
+  std::string plain;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    encoded += (i == 0 ? "" : ", ") + json_string(values[i]);
+    plain += (i == 0 ? "" : "; ") + values[i];
+  }
+  return add_scalar(key, encoded + "]", values.empty() ? "none" : plain);
+}
 JsonObject& JsonObject::add(std::string_view key, const JsonObject& value) {
   members_.push_back({std::string(key), "", "", std::make_shared<const JsonObject>(value)});
   return *this;

@@ -158,6 +158,8 @@ void run_localize(const LocalizeOptions& options) {
   if (options.method == "mcl") summary.add("particles", options.particles).add("sensor", options.sensor);
   if (options.reverse_from_tv) summary.add("odometry_steps_reversed", repair.reversed_steps());
   summary.merge(odometry_report(session.odometry_stats()));
+  std::vector<std::string> warnings = geometry_warnings(reader);
+  if (const auto warning = odometry_warning(session.odometry_stats())) warnings.push_back(*warning);
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
   summary.add("us_per_update", 1e6 * run.localizer_cpu_s / static_cast<double>(std::max<std::size_t>(run.sensor_updates, 1)));
@@ -168,6 +170,7 @@ void run_localize(const LocalizeOptions& options) {
   summary.add("data_duration_s", run.data_duration_s);
   summary.add("realtime_factor", cpu > 0.0 ? std::optional<double>(run.data_duration_s / cpu) : std::nullopt);
   summary.add("peak_rss_mb", peak_rss_mb()).add("trajectory", options.out);
+  summary.add("warnings", warnings);
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
 }
 

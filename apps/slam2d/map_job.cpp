@@ -34,7 +34,14 @@ struct MappingRun {
   std::size_t backwards_timestamps = 0;
   std::size_t skipped_lines = 0;
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
+  std::vector<std::string> warnings;  // what the reader and the method could not decide
 };
+
+// The odometry guard's counts and its warning, into the run.
+void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
+  run.method_summary.merge(odometry_report(stats));
+  if (const auto warning = odometry_warning(stats)) run.warnings.push_back(*warning);
+}
 
 // Streams the log's laser scans to `add_scan(laser)` (which returns the robot pose it estimated),
 // with the progress line; fills every field of the run but the map.
@@ -57,6 +64,7 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
   }
   progress.finish();
   print_geometry_warnings(reader);
+  run.warnings = geometry_warnings(reader);
   check(!run.trajectory.empty(), reader.path() + ": no laser scans in the log");
   run.backwards_timestamps = reader.stats().backwards_laser_timestamps;
   run.skipped_lines = reader.stats().skipped_lines;
@@ -90,7 +98,7 @@ MappingRun map_with_hector(const MapJobOptions& options) {
     return slam.add_scan(laser.scan, inputs).T_map_robot;
   });
   run.map = slam.map().level(0).to_occupancy_map();
-  if (!options.no_odometry) run.method_summary.merge(odometry_report(slam.odometry_stats()));
+  if (!options.no_odometry) report_odometry(run, slam.odometry_stats());
   return run;
 }
 
@@ -114,7 +122,7 @@ MappingRun map_with_graph(const MapJobOptions& options) {
   run.method_summary.add("loop_attempts", stats.loop_attempts);
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
-  if (!options.no_odometry) run.method_summary.merge(odometry_report(slam.odometry_stats()));
+  if (!options.no_odometry) report_odometry(run, slam.odometry_stats());
   return run;
 }
 
@@ -138,7 +146,7 @@ MappingRun map_with_rbpf(const MapJobOptions& options) {
   run.method_summary.add("threads", options.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
-  run.method_summary.merge(odometry_report(slam.odometry_stats()));
+  report_odometry(run, slam.odometry_stats());
   return run;
 }
 
@@ -194,6 +202,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("resolution", options.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("peak_rss_mb", peak_rss_mb());
+  summary.add("warnings", run.warnings);
   write_outputs(options.out_dir, run, summary);
   return {std::move(run.map), std::move(run.trajectory), std::move(summary)};
 }

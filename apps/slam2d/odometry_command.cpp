@@ -89,7 +89,12 @@ void run_odometry(const OdometryOptions& options) {
   summary.add("mean_iterations", static_cast<double>(stats.total_iterations) / matches).add("failures", stats.failures);
   summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
   summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
-  if (!options.no_odometry) summary.merge(odometry_report(odometry.odometry_stats()));
+  std::vector<std::string> warnings = geometry_warnings(reader);
+  if (!options.no_odometry) {
+    summary.merge(odometry_report(odometry.odometry_stats()));
+    if (const auto warning = odometry_warning(odometry.odometry_stats())) warnings.push_back(*warning);
+  }
+  summary.add("warnings", warnings);
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
 }
 

@@ -52,15 +52,19 @@ void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const s
                                     : range_max_help);
 }
 
-void print_geometry_warnings(const CarmenReader& reader) {
+std::vector<std::string> geometry_warnings(const CarmenReader& reader) {
+  std::vector<std::string> warnings;
   for (const OldLaserGeometry& geometry : reader.stats().old_laser_geometries) {
     for (const std::string& warning : geometry.warnings) {
-      std::fputs(fmt::format("{}:{}: warning: {} geometry, {} beams: {}\n", reader.path(), geometry.first_line,
-                             geometry.rear ? "RLASER" : "FLASER", geometry.beams, warning)
-                     .c_str(),
-                 stderr);
+      warnings.push_back(fmt::format("{}:{}: warning: {} geometry, {} beams: {}", reader.path(), geometry.first_line,
+                                     geometry.rear ? "RLASER" : "FLASER", geometry.beams, warning));
     }
   }
+  return warnings;
+}
+
+void print_geometry_warnings(const CarmenReader& reader) {
+  for (const std::string& warning : geometry_warnings(reader)) std::fputs((warning + "\n").c_str(), stderr);
 }
 
 }  // namespace slam2d::cli

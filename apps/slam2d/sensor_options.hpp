@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "slam2d/io/carmen.hpp"
 
@@ -18,8 +19,11 @@ namespace slam2d::cli {
 /// the help of --range-max where the command gives it a further meaning.
 void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const std::string& range_max_help = "");
 
-/// Prints the warnings of the FLASER/RLASER geometries `reader` decided (PARAM lines dropped,
-/// ambiguous units) on stderr, one line each: "PATH:LINE: warning: ...". Call it after reading.
+/// The warnings of the FLASER/RLASER geometries `reader` decided (PARAM lines dropped, ambiguous
+/// units), one line each: "PATH:LINE: warning: FLASER geometry, N beams: ...". Call it after reading.
+std::vector<std::string> geometry_warnings(const CarmenReader& reader);
+
+/// The same on stderr.
 void print_geometry_warnings(const CarmenReader& reader);
 
 }  // namespace slam2d::cli
