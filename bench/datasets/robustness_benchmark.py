@@ -2,7 +2,9 @@
 """Robustness benchmark: how methods degrade under injected faults (docs/faults.md).
 
 Public logs (default): for each log (intel, aces, fr079) x each fault at two severities (the
-FAULTS table below) x each method (map --method hector|graph|rbpf, odometry --matcher pl-icp):
+FAULTS table below) x each method (map --method hector|graph|rbpf, odometry --matcher pl-icp,
+localize --method mcl from the known first pose or with --global, in the map of the building's
+corrected log: LOCALIZATION below):
     slam2d perturb LOG --out LOG2 --fault SPEC --seed SEED --quiet --json
     slam2d map LOG2 --method METHOD --out DIR --quiet --json      (or: slam2d odometry LOG2 --matcher pl-icp ...)
     slam2d eval TRAJ --relations RELATIONS --json
@@ -77,7 +79,16 @@ SEVERITIES = ["mild", "severe"]
 RESTAMP = {"jitter", "backwards"}
 # The odometry degradation of the corrected logs, applied in this order.
 DEGRADE = ["wheel-scale:translation=1.03,rotation=1.01", "heading-drift:rate=0.5", "stall:every=60,duration=1.2"]
-METHODS = ["hector", "graph", "rbpf", "pl-icp"]
+METHODS = ["hector", "graph", "rbpf", "pl-icp", "mcl", "mcl-global"]
+# Localization (mcl: tracking from the known first pose; mcl-global: --global, scored after
+# converged_at_s) runs in a map built from the SLAM-corrected log of the same building with
+# `slam2d map CORRECTED --method odometry` (its odometry triples are the corrected poses). The raw
+# log's first scan in that map (docs/methods/localization.md); ACES has none known, so no MCL row.
+LOCALIZATION = {
+    "intel": {"corrected": "intel/intel-corrected.log.gz", "initial": "-0.0718,-0.1626,0.2200", "extra": []},
+    "fr079": {"corrected": "fr079/freiburg-079-corrected.log.gz", "initial": "0.0012,-0.0011,0.0",
+              "extra": ["--reverse-from-tv"]},
+}
 QUICK = {"logs": ["aces"], "corrected_logs": ["edmonton", "seattle"], "severities": ["severe"],
          "faults": ["stall", "wheel-scale", "decimate", "range-max", "spurious-short"], "methods": ["hector", "pl-icp"]}
 
@@ -89,8 +100,16 @@ def run_json(command):
     return json.loads(result.stdout)
 
 
-def method_command(args, method, log, out_dir):
-    """The command that runs `method` on `log`, and the trajectory it writes."""
+def method_command(args, method, log, out_dir, localization=None):
+    """The command that runs `method` on `log`, and the trajectory it writes. Localization methods
+    need `localization`: {"map": MAP.yaml, "initial": "x,y,theta", "extra": [...]}."""
+    if method in ("mcl", "mcl-global"):
+        if localization is None:
+            raise RuntimeError(f"{method}: no map of this building with a known first pose")
+        trajectory = os.path.join(out_dir, "trajectory.txt")
+        start = ["--global"] if method == "mcl-global" else ["--initial", localization["initial"]]
+        return [args.slam2d, "localize", log, "--map", localization["map"], "--method", "mcl", *start,
+                *localization["extra"], "--seed", str(args.seed), "--out", trajectory, "--quiet", "--json"], trajectory
     if method == "pl-icp":
         trajectory = os.path.join(out_dir, "trajectory.txt")
         return [args.slam2d, "odometry", log, "--matcher", "pl-icp", "--out", trajectory, "--quiet", "--json"], trajectory
@@ -121,21 +140,39 @@ def restore_stamps(trajectory, original_log, perturbed_log, out):
     return out
 
 
-def run_method(args, method, log, out_dir, eval_arguments, original_log=None):
+def after_convergence(trajectory, converged_at_s, out):
+    """The trajectory without the poses before converged_at_s (s after its first stamp)."""
+    with open(trajectory) as f:
+        lines = [line for line in f if line.strip() and not line.startswith("#")]
+    first = float(lines[0].split()[0])
+    with open(out, "w") as kept:
+        kept.writelines(line for line in lines if float(line.split()[0]) >= first + converged_at_s)
+    return out
+
+
+def run_method(args, method, log, out_dir, eval_arguments, original_log=None, localization=None):
     """Runs the method and the evaluation; keeps the result in out_dir/result.json (for --resume).
-    With original_log, the trajectory's stamps are first mapped back to that log's (restore_stamps)."""
+    With original_log, the trajectory's stamps are first mapped back to that log's (restore_stamps).
+    A global localization is scored after it converged (converged_at_s is kept in the result)."""
     result_path = os.path.join(out_dir, "result.json")
     if args.resume and os.path.exists(result_path):
         with open(result_path) as f:
             return json.load(f)
     os.makedirs(out_dir, exist_ok=True)
-    command, trajectory = method_command(args, method, log, out_dir)
+    command = []
     try:
+        command, trajectory = method_command(args, method, log, out_dir, localization)
         summary = run_json(command)
         if original_log:
             trajectory = restore_stamps(trajectory, original_log, log, os.path.join(out_dir, "trajectory_original_stamps.txt"))
+        converged_at_s = summary.get("converged_at_s")
+        if method == "mcl-global":
+            if converged_at_s is None:
+                raise RuntimeError("never converged")
+            trajectory = after_convergence(trajectory, converged_at_s, os.path.join(out_dir, "trajectory_converged.txt"))
         error = run_json([args.slam2d, "eval", trajectory, *eval_arguments, "--json"])
-        result = {"error": error, "cpu_s": summary.get("cpu_s"), "command": " ".join(command)}
+        result = {"error": error, "cpu_s": summary.get("cpu_s"), "converged_at_s": converged_at_s,
+                  "warnings": summary.get("warnings"), "command": " ".join(command)}
     except (RuntimeError, json.JSONDecodeError) as failure:
         result = {"error": None, "failure": str(failure), "command": " ".join(command)}
     with open(result_path, "w") as f:
@@ -176,12 +213,25 @@ def public_benchmark(args):
     perturb_summaries = parallel(args, lambda log, fault, severity: perturb(
         args, os.path.join(args.data, LOGS[log][0]), [spec_of[fault, severity]], perturbed_path(log, fault, severity)), cases)
 
+    localization = {}
+    if any(method.startswith("mcl") for method in args.methods):
+        for log in args.logs:
+            if log in LOCALIZATION:
+                entry = LOCALIZATION[log]
+                map_dir = os.path.join(args.out, "maps", log)
+                if not (args.resume and os.path.exists(os.path.join(map_dir, "map.yaml"))):
+                    run_json([args.slam2d, "map", os.path.join(args.data, entry["corrected"]), "--method", "odometry",
+                              "--out", map_dir, "--quiet", "--json"])
+                localization[log] = {"map": os.path.join(map_dir, "map.yaml"), "initial": entry["initial"],
+                                     "extra": entry["extra"]}
+
     def run(log, fault, severity, method):
         relations = ["--relations", os.path.join(args.data, LOGS[log][1])]
         original = os.path.join(args.data, LOGS[log][0])
         source = original if fault == "clean" else perturbed_path(log, fault, severity)
         out_dir = os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
-        return run_method(args, method, source, out_dir, relations, original if fault in RESTAMP else None)
+        return run_method(args, method, source, out_dir, relations, original if fault in RESTAMP else None,
+                          localization.get(log))
 
     def run_dir(log, fault, severity, method):
         return os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
@@ -203,7 +253,8 @@ def public_benchmark(args):
                      "rot_mean_deg": result["error"]["rot_mean_deg"] if result["error"] else None,
                      "relations": result["error"]["relations"] if result["error"] else None,
                      "clean_relations": clean["relations"] if clean else None,
-                     "cpu_s": result.get("cpu_s"), "failure": result.get("failure"), "command": result["command"]})
+                     "cpu_s": result.get("cpu_s"), "converged_at_s": result.get("converged_at_s"),
+                     "failure": result.get("failure"), "command": result["command"]})
     changes = {f"{log}/{fault}/{severity}": summary for (log, fault, severity), summary in zip(cases, perturb_summaries) if summary}
     return rows, changes
 
@@ -288,6 +339,17 @@ def corrected_benchmark(args):
         index_stamps[name] = reduce_corrected_log(source, os.path.join(work, f"{name}.clf"), os.path.join(work, f"{name}.ref.txt"))
     parallel(args, lambda name: perturb(args, os.path.join(work, f"{name}.clf"), DEGRADE,
                                         os.path.join(work, f"{name}_degraded.clf")), [(name,) for name in args.logs])
+    # Localization: the map of the clean reduced log (its poses are the reference), the first pose known.
+    localization = {}
+    if any(method.startswith("mcl") for method in args.methods):
+        for name in args.logs:
+            map_dir = os.path.join(work, f"{name}_map")
+            if not (args.resume and os.path.exists(os.path.join(map_dir, "map.yaml"))):
+                run_json([args.slam2d, "map", os.path.join(work, f"{name}.clf"), "--method", "odometry", "--out", map_dir,
+                          "--quiet", "--json"])
+            with open(os.path.join(work, f"{name}.ref.txt")) as f:
+                first = f.readline().split()
+            localization[name] = {"map": os.path.join(map_dir, "map.yaml"), "initial": ",".join(first[1:4]), "extra": []}
 
     def run(name, condition, method):
         log = os.path.join(work, f"{name}.clf" if condition == "clean" else f"{name}_degraded.clf")
@@ -298,7 +360,7 @@ def corrected_benchmark(args):
             trajectory = os.path.join(out_dir, "trajectory.txt")
             odometry_trajectory(log, trajectory)
             return {"error": run_json([args.slam2d, "eval", trajectory, *reference, "--json"]), "command": "(input odometry)"}
-        return run_method(args, method, log, out_dir, reference)
+        return run_method(args, method, log, out_dir, reference, localization=localization.get(name))
 
     runs = [(name, condition, method) for name in args.logs for condition in ("clean", "degraded")
             for method in ["odometry"] + args.methods]
@@ -308,6 +370,7 @@ def corrected_benchmark(args):
         rows.append({"log": name, "condition": condition, "method": method, "index_stamps": index_stamps[name],
                      "ate_rmse_m": error.get("ate_rmse"), "rpe_trans_rmse_m": error.get("rpe_trans_rmse"),
                      "rpe_rot_rmse_deg": error.get("rpe_rot_rmse_deg"), "matched": error.get("matched"),
+                     "converged_at_s": result.get("converged_at_s"),
                      "failure": result.get("failure"), "command": result["command"]})
     return rows
 

@@ -13,7 +13,9 @@ const LocalizationEstimate& LocalizationSession::add(const SE2& T_odom_robot, co
   if (summary_.scans == 0) {
     first_stamp_ = scan.stamp;
     seen_odom_ = T_odom_robot;
-  } else if (odometry.trusted()) {  // an untrusted increment (stall, catch-up, jump) moves nothing
+  } else if (odometry.trusted() || odometry.fault == OdometryFault::kCatchUp) {
+    // A localizer predicts from odometry alone: during a stall nothing moved it, so the catch-up is
+    // motion not yet counted, and is kept. A jump beyond what the robot could do moves nothing.
     seen_odom_ = seen_odom_ * odometry.increment;
   }
   const double t = scan.stamp - first_stamp_;

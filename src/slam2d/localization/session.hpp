@@ -1,7 +1,8 @@
 #pragma once
 // One localization run over a log, the way `slam2d localize` and the tests drive a localizer:
-// feeds the scans with their odometry checked by the odometry guard (core/odometry_guard.hpp: an
-// untrusted increment moves nothing), optionally kidnaps the robot (corrupts the odometry once),
+// feeds the scans with their odometry checked by the odometry guard (core/odometry_guard.hpp: a
+// jump moves nothing; a stall's catch-up is kept, since the localizer's prediction did not follow
+// the robot during the stall), optionally kidnaps the robot (corrupts the odometry once),
 // times the localizer, and keeps the events the summary reports.
 //
 // - converged_at_s: seconds of data from the first scan to the first step reported localized.
