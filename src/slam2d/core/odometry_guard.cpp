@@ -25,6 +25,7 @@ void validate(const OdometryGuardConfig& config) {
         "OdometryGuardConfig: jump slacks must be finite and >= 0");
   check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
   check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
+  check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
 }
 
 const char* to_string(OdometryFault fault) {
@@ -48,12 +49,13 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     result.dt = stamp - last_stamp_;
     result.gap = result.dt > config_.gap;
     stats_.gaps += result.gap ? 1 : 0;
-    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_);
+    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stamp - moved_at_);
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
     // integrated): the increment after it may still carry that motion.
     lag_allowance_ = result.gap ? result.dt : 0.0;
     ++stats_.checks;
   }
+  if (result.first || !is_frozen(result.increment)) moved_at_ = stamp;
   last_pose_ = T_odom_robot;
   last_stamp_ = stamp;
   return result;
@@ -61,12 +63,18 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
 
 // The state machine of the header: stall (frozen after motion) until the pose moves, then one
 // catch-up; otherwise a jump when the increment is out of bounds.
-OdometryFault OdometryGuard::classify(const SE2& increment, double dt) {
+bool OdometryGuard::is_frozen(const SE2& increment) const {
+  return increment.translation().norm() <= config_.frozen_translation &&
+         std::abs(increment.theta()) <= config_.frozen_rotation;
+}
+
+OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double frozen_for) {
   const double translation = increment.translation().norm();
   const double rotation = std::abs(increment.theta());
-  const bool frozen = translation <= config_.frozen_translation && rotation <= config_.frozen_rotation;
-  if (frozen) {
-    if (!stalled_ && !was_moving_) return OdometryFault::kNone;  // at rest: "no motion" is true
+  if (is_frozen(increment)) {
+    // At rest "no motion" is true; and a pose repeated over less than stall_duration may be an
+    // odometry slower than the scanner.
+    if (!stalled_ && (!was_moving_ || frozen_for < config_.stall_duration)) return OdometryFault::kNone;
     if (!stalled_) ++stats_.stalls;
     stalled_ = true;
     ++stats_.stalled_scans;

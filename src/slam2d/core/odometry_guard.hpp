@@ -8,11 +8,13 @@
 // follows the robot by scan matching during the freeze, then adds the jump on top: the motion of
 // the freeze is counted twice. The checks, per increment between two consecutive scans:
 //  - stall: the odometry pose did not change at all (to `frozen_translation` / `frozen_rotation`)
-//    while the increment before it moved (more than `moving_translation` / `moving_rotation`): an
-//    encoder or driver that stopped reporting, not a robot that stopped. A robot comes to rest
-//    through smaller and smaller increments, so a frozen pose right after a moving one is taken
-//    as a stall and stays one until the pose moves again. Frozen increments after small ones (a
-//    robot at rest) are trusted: they say "no motion", which is true.
+//    for at least `stall_duration` while the increment before it moved (more than
+//    `moving_translation` / `moving_rotation`): an encoder or driver that stopped reporting, not a
+//    robot that stopped. A robot comes to rest through smaller and smaller increments, so a pose
+//    frozen right after a moving one is taken as a stall and stays one until the pose moves
+//    again. Frozen increments after small ones (a robot at rest) are trusted: they say "no
+//    motion", which is true; so are those within stall_duration of the last change (an odometry
+//    slower than the scanner repeats its pose; Intel has scans 1 ms apart).
 //  - catch-up: the first increment after a stall carries the motion of the whole stall.
 //  - jump: an increment beyond what the robot could have moved in the time step: more than
 //    max_speed * dt + jump_translation_slack or max_turn_rate * dt + jump_rotation_slack, with dt
@@ -46,6 +48,7 @@ struct OdometryGuardConfig {
   double frozen_rotation = 1e-6;        // rad, >= 0
   double moving_translation = 0.01;     // m, >= 0: an increment larger than this (or the rotation
   double moving_rotation = 0.01;        // rad, >= 0  below) means the robot was moving
+  double stall_duration = 0.25;         // s, >= 0: a frozen pose is a stall once it stood this long
   double max_speed = 2.0;               // m/s, > 0
   double max_turn_rate = 4.0;           // rad/s, > 0
   double jump_translation_slack = 0.1;  // m, >= 0
@@ -92,12 +95,14 @@ class OdometryGuard {
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
-  OdometryFault classify(const SE2& increment, double dt);
+  OdometryFault classify(const SE2& increment, double dt, double frozen_for);
+  bool is_frozen(const SE2& increment) const;
   bool exceeds_bounds(const SE2& increment, double dt) const;
 
   OdometryGuardConfig config_;
   std::optional<SE2> last_pose_;
   double last_stamp_ = 0.0;
+  double moved_at_ = 0.0;    // s, stamp of the last scan whose pose differed from the one before
   bool was_moving_ = false;  // the last trusted increment moved
   bool stalled_ = false;     // inside a stall
   double lag_allowance_ = 0.0;  // s, added to the next dt: the length of a gap just passed

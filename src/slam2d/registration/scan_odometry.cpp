@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry.hpp"
 
 namespace slam2d {
 namespace {
@@ -58,7 +59,7 @@ SE2 ScanOdometry::predict(double stamp, const std::optional<SE2>& odom_pose) con
   const SE2 T_keyframe_previous = keyframe_->T_world_robot.between(T_world_previous_);
   const double dt = stamp - previous_stamp_;
   if (!velocity_ || !(dt > 0.0) || dt > config_.max_guess_dt) return T_keyframe_previous;
-  return T_keyframe_previous * SE2::exp(velocity_->log() * (dt / velocity_dt_));
+  return T_keyframe_previous * constant_velocity_motion(*velocity_, dt, velocity_dt_);
 }
 
 bool ScanOdometry::passes_gate(const MatchResult& match, const SE2& guess, std::size_t points) const {
@@ -89,13 +90,20 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   // The guarded odometry pose (the odometry with every untrusted increment replaced, below, by
   // the motion the scan is estimated to have made), or none when this increment is not trusted.
   std::optional<SE2> guarded;
-  if (odom_pose && odometry_guard_.check(scan.stamp, *odom_pose).trusted()) {
-    guarded = odometry_correction_ ? *odometry_correction_ * *odom_pose : *odom_pose;
+  bool trusted = false;
+  if (odom_pose) {
+    const OdometryCheck odometry = odometry_guard_.check(scan.stamp, *odom_pose);
+    trusted = odometry.trusted();
+    if (trusted) guarded = odometry_correction_ ? *odometry_correction_ * *odom_pose : *odom_pose;
+    if (odometry.fault == OdometryFault::kCatchUp) {  // the motion since the last trusted scan
+      guarded = guarded_trusted_ * odometry.increment;
+      odometry_correction_ = *guarded * odom_pose->inverse();
+    }
   }
   if (!keyframe_) {  // the first scan fixes the world frame
     const SE2 pose = odom_pose.value_or(SE2());
     keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
-    if (odom_pose) guarded_previous_ = *odom_pose;
+    if (odom_pose) guarded_previous_ = guarded_trusted_ = *odom_pose;
     ++stats_.keyframes;
     T_world_previous_ = pose;
     previous_stamp_ = scan.stamp;
@@ -124,6 +132,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
     odometry_correction_ = *guarded * odom_pose->inverse();
   }
   if (guarded) guarded_previous_ = *guarded;
+  if (trusted) guarded_trusted_ = *guarded;
   update_velocity(scan.stamp, pose);
   trajectory_.push_back(scan.stamp, pose);
   const bool moved = T_keyframe_robot.translation().norm() >= config_.keyframe_distance ||

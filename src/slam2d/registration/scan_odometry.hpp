@@ -50,8 +50,9 @@ struct ScanOdometryConfig {
   double max_correction_distance = 0.5;    // m, > 0: gate on |t| of guess^-1 * result (CSM ROS: 0.5)
   double max_correction_angle = 0.5;       // rad, > 0: gate on |theta| of guess^-1 * result
   // Each odometry increment is checked first (core/odometry_guard.hpp); a scan whose increment is
-  // not trusted (a stall, its catch-up, a jump) is predicted by constant velocity, and its
-  // estimated motion replaces the increment in the odometry the next predictions start from.
+  // not trusted (a stall, a jump) is predicted by constant velocity, and its estimated motion
+  // replaces the increment in the odometry the next predictions start from; a stall's catch-up
+  // is applied from the last trusted scan.
   OdometryGuardConfig odometry_guard{};
 };
 
@@ -103,6 +104,7 @@ class ScanOdometry {
   // (none until the first untrusted increment, so clean odometry is used exactly as logged).
   std::optional<SE2> odometry_correction_;
   SE2 guarded_previous_;  // the guarded odometry pose of the last scan
+  SE2 guarded_trusted_;   // ... of the last scan whose increment was trusted
   std::optional<Keyframe> keyframe_;
   SE2 T_world_previous_;          // the last scan's pose
   double previous_stamp_ = 0.0;   // s

@@ -7,6 +7,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry.hpp"
 
 namespace slam2d {
 
@@ -93,6 +94,7 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   previous_dt_ = last_pose_ ? scan.stamp - last_stamp_ : 0.0;
   previous_pose_ = last_pose_;
   last_pose_ = step.T_map_robot;
+  if (odometry_.trusted()) last_trusted_pose_ = step.T_map_robot;
   last_stamp_ = scan.stamp;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
   return step;
@@ -104,9 +106,9 @@ HectorMatchResult HectorSlam::match(const LaserScan& scan, const LaserScan& corr
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
   const bool with_odometry = odometry_trusted();
   HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(scan) : std::nullopt);
-  if (const std::optional<SE2> start = competing_start()) {
-    HectorMatchResult alternative = match_from(points, *start, false, std::nullopt);
-    if (alternative.equations.cost < result.equations.cost) result = std::move(alternative);
+  if (const std::optional<UntrustedStarts> starts = untrusted_starts()) {
+    HectorMatchResult second = match_from(points, starts->second, false, std::nullopt);
+    if (second.equations.cost < starts->second_factor * result.equations.cost) result = std::move(second);
   }
   return result;
 }
@@ -126,14 +128,28 @@ HectorMatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& poi
   return result;
 }
 
-// A jump may be a fault or a fast motion the bounds did not foresee: the guard cannot tell, so a
-// second match starts from the odometry, and the better fit wins. Stalls and catch-ups have none:
-// their increment repeats motion already followed.
-std::optional<SE2> HectorSlam::competing_start() const {
-  if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.fault != OdometryFault::kJump) {
-    return std::nullopt;
+// Where the match of a scan whose odometry increment the guard did not trust starts, and the
+// second start that competes with it:
+//  - stall: the last estimated motion repeated (a stall is declared only after the pose stood
+//    still for a while, so that motion is what the scans showed meanwhile: about none for a robot
+//    come to rest, a metre in a log with a scan every two seconds), against the last pose;
+//  - catch-up: the estimate at the last trusted scan moved by the catch-up, which carries the
+//    motion since then, so nothing is counted twice; against the last pose;
+//  - jump: the last pose, against the odometry (a fault, or a motion the bounds did not foresee).
+// The second start wins with a better fit; for stalls and catch-ups a fifth better, since the
+// first rests on the motion seen, not on a guess.
+std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const {
+  if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.trusted()) return std::nullopt;
+  switch (odometry_.fault) {
+    case OdometryFault::kStall: {
+      const SE2 last_motion = previous_pose_ ? previous_pose_->between(*last_pose_) : SE2();
+      return UntrustedStarts{*last_pose_ * last_motion, *last_pose_, 0.8};
+    }
+    case OdometryFault::kCatchUp: return UntrustedStarts{last_trusted_pose_ * odometry_.increment, *last_pose_, 0.8};
+    case OdometryFault::kJump: return UntrustedStarts{*last_pose_, *last_pose_ * odometry_.increment, 1.0};
+    case OdometryFault::kNone: break;
   }
-  return *last_pose_ * odometry_.increment;
+  return std::nullopt;
 }
 
 // The Gaussian prior at the motion prediction (constant velocity when the guess is the last pose);
@@ -154,14 +170,11 @@ SE2 HectorSlam::predict(const LaserScan& scan, MotionPrior prior) const {
   switch (prior) {
     case MotionPrior::kOdometry:
       if (odometry_.trusted()) return *last_pose_ * odometry_.increment;
-      return *last_pose_;  // as without odometry
+      return untrusted_starts()->first;
     case MotionPrior::kConstantVelocity: {
-      // The last motion, scaled to this time step; the scale is clamped to [0.5, 2] (and 1 when a
-      // stamp steps back) so that out-of-order or jittery stamps cannot blow the extrapolation up.
       const double dt = scan.stamp - last_stamp_;
       if (!previous_pose_ || dt > config_.max_prior_dt) return *last_pose_;
-      const double scale = dt > 0.0 && previous_dt_ > 0.0 ? std::clamp(dt / previous_dt_, 0.5, 2.0) : 1.0;
-      return *last_pose_ * SE2::exp(previous_pose_->between(*last_pose_).log() * scale);
+      return *last_pose_ * constant_velocity_motion(previous_pose_->between(*last_pose_), dt, previous_dt_);
     }
     case MotionPrior::kLastPose: break;
   }

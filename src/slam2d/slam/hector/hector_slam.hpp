@@ -23,7 +23,7 @@ namespace slam2d {
 
 enum class MotionPrior {
   kOdometry,          // last estimate * (odometry delta since the last scan) when the odometry
-                      // guard trusts it, else the last estimate; needs odometry poses
+                      // guard trusts it, else HectorSlam::untrusted_starts; needs odometry poses
   kConstantVelocity,  // last estimate * (the last estimated motion, scaled to the time step)
   kLastPose,          // the last estimate (Hector's default without odometry)
 };
@@ -59,9 +59,8 @@ struct HectorSlamConfig {
   double recovery_residual_without_odometry = 0.25;  // 1, for recovery_residual
   // With the odometry prior, each increment is checked first (core/odometry_guard.hpp): a scan
   // whose increment is not trusted (a stall, its catch-up, a jump) is matched as without
-  // odometry: from the last pose, with the settings above, no prior and no solution remapping.
-  // A jump is matched from both the last pose and the odometry, and the better fit is kept
-  // (HectorSlam::competing_start).
+  // odometry (the settings above, no prior, no solution remapping) from two starts, and the
+  // better fit is kept (HectorSlam::untrusted_starts).
   OdometryGuardConfig odometry_guard{};
 };
 
@@ -103,9 +102,14 @@ class HectorSlam {
  private:
   HectorMatchResult match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
                           const SE2& prediction) const;
+  struct UntrustedStarts {
+    SE2 first;                   // the prediction
+    SE2 second;                  // the competing start
+    double second_factor = 1.0;  // the second wins when its cost is below this times the first's
+  };
   HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
                                const std::optional<PosePrior>& prior) const;
-  std::optional<SE2> competing_start() const;
+  std::optional<UntrustedStarts> untrusted_starts() const;
   std::optional<PosePrior> pose_prior(const LaserScan& scan) const;
   bool odometry_trusted() const;
   SE2 predict(const LaserScan& scan) const;
@@ -122,6 +126,7 @@ class HectorSlam {
   MapPyramid map_;
   Trajectory trajectory_;
   std::optional<SE2> last_pose_;       // estimate at the previous scan
+  SE2 last_trusted_pose_;              // estimate at the last scan whose odometry increment was trusted
   std::optional<SE2> previous_pose_;   // estimate at the scan before that
   double last_stamp_ = 0.0;
   double previous_dt_ = 0.0;           // s, between the two previous scans
