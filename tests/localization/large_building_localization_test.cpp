@@ -176,6 +176,24 @@ TEST(LargeBuildingLocalization, MclWithDefaultSettingsLocalizesGlobally) {
   }
 }
 
+// Same seed, same run; the particle budget holds even when it is smaller than the places.
+TEST(LargeBuildingLocalization, MclGlobalStartIsDeterministicAndKeepsItsParticleBudget) {
+  const auto lasers = laser_messages(building_run());
+  for (const std::size_t budget : {std::size_t{50}, std::size_t{5000}}) {
+    MonteCarloLocalization a(building_map(), MclConfig{.min_particles = 50, .max_particles = budget, .seed = 4});
+    MonteCarloLocalization b(building_map(), MclConfig{.min_particles = 50, .max_particles = budget, .seed = 4});
+    a.initialize_global();
+    b.initialize_global();
+    for (std::size_t i = 0; i < 100; ++i) {
+      const LocalizationEstimate ea = a.update(lasers[i]->odom_pose, lasers[i]->scan);
+      const LocalizationEstimate eb = b.update(lasers[i]->odom_pose, lasers[i]->scan);
+      ASSERT_TRUE(ea.pose.is_approx(eb.pose, 0.0)) << "step " << i;
+      ASSERT_LE(a.particles().size(), budget);
+    }
+    EXPECT_FALSE(a.searching());
+  }
+}
+
 TEST(LargeBuildingLocalization, MarkovGridWithDefaultSettingsLocalizesGlobally) {
   MarkovGridLocalization markov(building_map());
   markov.initialize_global();

@@ -347,6 +347,21 @@ void MonteCarloLocalization::update_recovery(double p_inject) {
 LocalizationEstimate MonteCarloLocalization::summarize(const ScanBeams& beams) {
   LocalizationEstimate estimate;
   weighted_pose_statistics(particles_, weights_, &estimate.pose, &estimate.covariance);
+  if (!place_log_likelihood_.empty()) {
+    // Several places: the pose is the leading place's mean (the mean of all would lie between
+    // them); the covariance stays the spread of all of them.
+    const auto leader = static_cast<std::uint32_t>(
+        std::max_element(place_log_likelihood_.begin(), place_log_likelihood_.end()) - place_log_likelihood_.begin());
+    std::vector<SE2> poses;
+    std::vector<double> weights;
+    for (std::size_t i = 0; i < particles_.size(); ++i) {
+      if (place_of_[i] != leader) continue;
+      poses.push_back(particles_[i]);
+      weights.push_back(within_weights_[i]);
+    }
+    Covariance3 unused;
+    weighted_pose_statistics(poses, weights, &estimate.pose, &unused);
+  }
   estimate.plausibility = map_.plausibility(beams.points_robot, estimate.pose, config_.status.plausibility_distance);
   // Not localized either while the recovery set searches, or while the set it displaced explains
   // the scan better: the filter doubts its place.
@@ -408,7 +423,8 @@ LocalizationEstimate MonteCarloLocalization::search_update(const SE2& T_odom_rob
   // The fine pass: the particle filter, seeded around the best hypotheses, weighs this scan.
   searching_ = false;
   const std::vector<std::vector<SE2>> places = search_->seed_places(
-      config_.max_particles, config_.max_places, config_.max_particles, config_.place_radius_xy, config_.place_radius_theta, rng_);
+      config_.max_particles, std::min(config_.max_places, config_.max_particles), config_.max_particles,
+      config_.place_radius_xy, config_.place_radius_theta, rng_);
   particles_.clear();
   place_of_.clear();
   for (std::size_t p = 0; p < places.size(); ++p) {
