@@ -125,7 +125,7 @@ void expect_global_localization(const RunResult& result, double max_converge_s) 
 }
 
 TEST(OfficeLocalization, MclLocalizesGlobally) {
-  MonteCarloLocalization mcl(office_map(), MclConfig{.max_particles = 20000, .seed = 3});
+  MonteCarloLocalization mcl(office_map(), MclConfig{.seed = 3});  // default settings
   mcl.initialize_global();
   const RunResult result = run(mcl);
   expect_global_localization(result, 30.0);

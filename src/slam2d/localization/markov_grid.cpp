@@ -213,7 +213,7 @@ void MarkovGridLocalization::blur(int xy_passes, int theta_passes) {
 void MarkovGridLocalization::sensor_update(const std::vector<Eigen::Vector2d>& points_robot) {
   const float peak = belief_[argmax()];
   const double threshold = (status_.localized() ? config_.selective_threshold : config_.prune_threshold) * peak;
-  log_likelihoods_.resize(belief_.size(), 0.0);
+  log_likelihoods_.resize(belief_.size(), 0.0f);
   double best = -std::numeric_limits<double>::infinity();
   evaluated_last_ = 0;
   const CellRange b = box_;
@@ -225,8 +225,9 @@ void MarkovGridLocalization::sensor_update(const std::vector<Eigen::Vector2d>& p
           belief_[i] = 0.0f;
           continue;
         }
-        log_likelihoods_[i] = sensor_map_.scan_log_likelihood(points_robot, cell_pose(k, y, x));
-        best = std::max(best, log_likelihoods_[i]);
+        const double log_likelihood = sensor_map_.scan_log_likelihood(points_robot, cell_pose(k, y, x));
+        log_likelihoods_[i] = static_cast<float>(log_likelihood);
+        best = std::max(best, log_likelihood);
         ++evaluated_last_;
       }
     }
@@ -358,7 +359,7 @@ std::size_t MarkovGridLocalization::active_cells() const {
 
 std::size_t MarkovGridLocalization::memory_bytes() const {
   return sizeof(*this) + sensor_map_.memory_bytes() + free_.capacity() + (belief_.capacity() + scratch_.capacity()) * sizeof(float) +
-         log_likelihoods_.capacity() * sizeof(double);
+         log_likelihoods_.capacity() * sizeof(float);
 }
 
 }  // namespace slam2d

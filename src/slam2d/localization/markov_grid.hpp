@@ -103,7 +103,7 @@ class MarkovGridLocalization : public Localizer {
   std::vector<std::uint8_t> free_;  // width * height
   std::vector<float> belief_;       // angles * height * width
   std::vector<float> scratch_;
-  std::vector<double> log_likelihoods_;
+  std::vector<float> log_likelihoods_;  // of the evaluated cells (float: half the memory of the largest array)
   bool initialized_ = false;
   bool started_ = false;
   SE2 odom_at_update_;

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -28,6 +29,10 @@ void validate(const MclConfig& config) {
   check(config.takeover_updates >= 1 && config.recovery_updates >= 1 && config.displaced_updates >= 1,
         "mcl: takeover_updates, recovery_updates and displaced_updates must be >= 1");
   check(config.status.lost_after >= 1, "mcl: status.lost_after must be >= 1");
+  check(config.place_settle_updates >= 0, "mcl: place_settle_updates must be >= 0");
+  check(config.max_places >= 1 && config.place_radius_xy > 0.0 && config.place_radius_theta > 0.0 && config.place_margin > 0.0,
+        "mcl: max_places must be >= 1, place_radius_xy, place_radius_theta and place_margin > 0");
+  validate(config.global);
 }
 
 namespace {
@@ -95,16 +100,25 @@ void MonteCarloLocalization::initialize(const SE2& T_map_robot, const Covariance
   weights_.assign(n, 1.0 / static_cast<double>(n));
   initialized_ = true;
   started_ = false;
+  searching_ = false;
+  place_of_.clear();
+  place_log_likelihood_.clear();
+  averages_started_ = false;
   status_.reset();
   drop_recovery();
 }
 
 void MonteCarloLocalization::initialize_global() {
-  particles_.resize(config_.max_particles);
-  for (SE2& p : particles_) p = map_.sample_free_pose(rng_);
-  weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  if (!search_) search_ = std::make_unique<GlobalPoseSearch>(map_, config_.global);
+  search_->restart();
+  particles_.clear();
+  weights_.clear();
   initialized_ = true;
   started_ = false;
+  searching_ = true;
+  place_of_.clear();
+  place_log_likelihood_.clear();
+  averages_started_ = false;
   status_.reset();
   drop_recovery();
 }
@@ -151,16 +165,115 @@ MonteCarloLocalization::SetLikelihood MonteCarloLocalization::weigh_poses(const 
 double MonteCarloLocalization::weigh(const ScanBeams& beams) {
   const SetLikelihood tracked = weigh_poses(beams, particles_, weights_);
   const double w_avg = tracked.mean;
-  if (sensor_updates_ == 0) {
+  if (!averages_started_) {
     w_slow_ = w_avg;
     w_fast_ = w_avg;
+    averages_started_ = true;
   } else {
     w_slow_ += config_.alpha_slow * (w_avg - w_slow_);  // Table 8.3, line 10
     w_fast_ += config_.alpha_fast * (w_avg - w_fast_);  // line 11
   }
   ++sensor_updates_;
+  if (!place_log_likelihood_.empty()) weigh_places();
   if (!recovery_.empty()) weigh_recovery(beams, tracked);
   return w_avg;
+}
+
+void MonteCarloLocalization::weigh_places() {
+  // p(z | place) is estimated by the mean of its particles' likelihoods (log-sum-exp), summed over
+  // the updates (Milstein et al. 2002). Weights: the place posterior times the weight within.
+  const std::size_t places = place_log_likelihood_.size();
+  std::vector<double> best(places, -std::numeric_limits<double>::infinity());
+  std::vector<double> sum(places, 0.0);
+  std::vector<std::size_t> count(places, 0);
+  for (std::size_t i = 0; i < particles_.size(); ++i) best[place_of_[i]] = std::max(best[place_of_[i]], config_.likelihood_exponent * log_likelihoods_[i]);
+  within_weights_.resize(particles_.size());
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    const std::uint32_t p = place_of_[i];
+    within_weights_[i] = std::exp(config_.likelihood_exponent * log_likelihoods_[i] - best[p]);
+    sum[p] += within_weights_[i];
+    ++count[p];
+  }
+  // The evidence counts once the places have settled: before, a place's marginal likelihood says
+  // more about how well its few particles happened to be drawn than about the place.
+  const bool counts = ++place_updates_ > config_.place_settle_updates;
+  double leader = -std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < places; ++p) {
+    if (count[p] == 0) continue;
+    if (counts) place_log_likelihood_[p] += best[p] + std::log(sum[p] / static_cast<double>(count[p]));
+    leader = std::max(leader, place_log_likelihood_[p]);
+  }
+  // A place that fell place_margin behind the leader is dropped (it gets no particles at resampling).
+  double total = 0.0;
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    const std::uint32_t p = place_of_[i];
+    const double lag = place_log_likelihood_[p] - leader;
+    within_weights_[i] /= sum[p];
+    weights_[i] = lag < -config_.place_margin ? 0.0 : within_weights_[i] * std::exp(lag);
+    total += weights_[i];
+  }
+  for (double& w : weights_) w /= total;
+}
+
+void MonteCarloLocalization::resample_places() {
+  const double leader = *std::max_element(place_log_likelihood_.begin(), place_log_likelihood_.end());
+  // The places kept, with their particles (and weights within) gathered.
+  std::vector<std::vector<SE2>> members(place_log_likelihood_.size());
+  std::vector<std::vector<double>> member_weights(place_log_likelihood_.size());
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    members[place_of_[i]].push_back(particles_[i]);
+    member_weights[place_of_[i]].push_back(within_weights_[i]);
+  }
+  std::vector<std::size_t> kept;  // best first
+  for (std::size_t p = 0; p < members.size(); ++p) {
+    if (!members[p].empty() && place_log_likelihood_[p] >= leader - config_.place_margin) kept.push_back(p);
+  }
+  std::stable_sort(kept.begin(), kept.end(), [&](std::size_t a, std::size_t b) { return place_log_likelihood_[a] > place_log_likelihood_[b]; });
+  // A place whose mean met a better place's joins it, its weights scaled by the evidence ratio.
+  std::vector<std::size_t> merged;
+  std::vector<SE2> means;
+  for (const std::size_t p : kept) {
+    SE2 mean;
+    Covariance3 unused;
+    weighted_pose_statistics(members[p], member_weights[p], &mean, &unused);
+    std::size_t q = 0;
+    while (q < merged.size() && ((mean.translation() - means[q].translation()).norm() > config_.place_radius_xy ||
+                                 std::abs(angle_difference(mean.theta(), means[q].theta())) > config_.place_radius_theta)) {
+      ++q;
+    }
+    if (q == merged.size()) {
+      merged.push_back(p);
+      means.push_back(mean);
+      continue;
+    }
+    const std::size_t better = merged[q];
+    const double ratio = std::exp(place_log_likelihood_[p] - place_log_likelihood_[better]);
+    for (std::size_t k = 0; k < members[p].size(); ++k) {
+      members[better].push_back(members[p][k]);
+      member_weights[better].push_back(ratio * member_weights[p][k]);
+    }
+  }
+  // Equal shares: no place starves because another explained the last scans a little better.
+  const std::size_t share = std::max<std::size_t>(1, config_.max_particles / merged.size());
+  particles_.clear();
+  place_of_.clear();
+  std::vector<double> log_likelihoods;
+  for (std::size_t m = 0; m < merged.size(); ++m) {
+    const std::size_t p = merged[m];
+    double total = 0.0;
+    for (const double w : member_weights[p]) total += w;
+    for (double& w : member_weights[p]) w /= total;
+    draw_low_variance(members[p], member_weights[p], share, rng_, scratch_);
+    particles_.insert(particles_.end(), scratch_.begin(), scratch_.end());
+    place_of_.insert(place_of_.end(), share, static_cast<std::uint32_t>(m));
+    log_likelihoods.push_back(place_log_likelihood_[p]);
+  }
+  place_log_likelihood_ = log_likelihoods;
+  weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  if (place_log_likelihood_.size() <= 1) {  // one place left: it dominates; plain MCL from here
+    place_log_likelihood_.clear();
+    place_of_.clear();
+  }
 }
 
 void MonteCarloLocalization::weigh_recovery(const ScanBeams& beams, const SetLikelihood& tracked) {
@@ -234,16 +347,36 @@ void MonteCarloLocalization::update_recovery(double p_inject) {
 LocalizationEstimate MonteCarloLocalization::summarize(const ScanBeams& beams) {
   LocalizationEstimate estimate;
   weighted_pose_statistics(particles_, weights_, &estimate.pose, &estimate.covariance);
+  if (!place_log_likelihood_.empty()) {
+    // Several places: the pose is the leading place's mean (the mean of all would lie between
+    // them); the covariance stays the spread of all of them.
+    const auto leader = static_cast<std::uint32_t>(
+        std::max_element(place_log_likelihood_.begin(), place_log_likelihood_.end()) - place_log_likelihood_.begin());
+    std::vector<SE2> poses;
+    std::vector<double> weights;
+    for (std::size_t i = 0; i < particles_.size(); ++i) {
+      if (place_of_[i] != leader) continue;
+      poses.push_back(particles_[i]);
+      weights.push_back(within_weights_[i]);
+    }
+    Covariance3 unused;
+    weighted_pose_statistics(poses, weights, &estimate.pose, &unused);
+  }
   estimate.plausibility = map_.plausibility(beams.points_robot, estimate.pose, config_.status.plausibility_distance);
   // Not localized either while the recovery set searches, or while the set it displaced explains
   // the scan better: the filter doubts its place.
   const bool doubt = !recovery_.empty() && (!displaced_ || recovery_better_);
-  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_) && !doubt;
+  // While several candidate places are tracked, none dominates: not localized.
+  const bool likely = !(w_fast_ < config_.min_likelihood_ratio * w_slow_) && !doubt && place_log_likelihood_.empty();
   estimate.localized = status_.update(estimate.covariance, likely ? estimate.plausibility : 0.0);
   return estimate;
 }
 
 void MonteCarloLocalization::resample() {
+  if (!place_log_likelihood_.empty()) {
+    resample_places();
+    return;
+  }
   std::size_t target = config_.max_particles;
   if (config_.kld_sampling) {
     draw_low_variance(particles_, weights_, std::max(particles_.size(), config_.min_particles), rng_, scratch_);
@@ -270,8 +403,50 @@ void MonteCarloLocalization::resample() {
   update_recovery(p_inject);
 }
 
+LocalizationEstimate MonteCarloLocalization::search_update(const SE2& T_odom_robot, const LaserScan& scan) {
+  if (!started_) odom_at_start_ = T_odom_robot;
+  started_ = true;
+  odom_at_update_ = T_odom_robot;
+  const ScanBeams coarse = select_beams(scan, config_.global.max_beams, config_.usable_range);
+  search_->add_scan(coarse.points_robot, odom_at_start_.between(T_odom_robot));
+  if (!search_->done()) {
+    ++sensor_updates_;
+    // Not localized while the candidates are spread over the map; the best one as the estimate.
+    LocalizationEstimate estimate;
+    SE2 mean;
+    search_->spread(config_.min_particles, &mean, &estimate.covariance);
+    estimate.pose = search_->best();
+    estimate.plausibility = map_.plausibility(coarse.points_robot, estimate.pose, config_.status.plausibility_distance);
+    estimate_ = estimate;
+    return estimate_;
+  }
+  // The fine pass: the particle filter, seeded around the best hypotheses, weighs this scan.
+  searching_ = false;
+  const std::vector<std::vector<SE2>> places = search_->seed_places(
+      config_.max_particles, std::min(config_.max_places, config_.max_particles), config_.max_particles,
+      config_.place_radius_xy, config_.place_radius_theta, rng_);
+  particles_.clear();
+  place_of_.clear();
+  for (std::size_t p = 0; p < places.size(); ++p) {
+    particles_.insert(particles_.end(), places[p].begin(), places[p].end());
+    place_of_.insert(place_of_.end(), places[p].size(), static_cast<std::uint32_t>(p));
+  }
+  place_log_likelihood_.assign(places.size() > 1 ? places.size() : 0, 0.0);
+  place_updates_ = 0;
+  if (places.size() <= 1) place_of_.clear();
+  weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  const ScanBeams beams = select_beams(scan, config_.max_beams, config_.usable_range);
+  weigh(beams);
+  estimate_ = summarize(beams);
+  resample();
+  return estimate_;
+}
+
 LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, const LaserScan& scan) {
   check(initialized_, "mcl: initialize() or initialize_global() before update()");
+  if (searching_ && (!started_ || moved_enough(odom_at_update_, T_odom_robot, config_.update_distance, config_.update_angle))) {
+    return search_update(T_odom_robot, scan);
+  }
   if (started_) {
     if (!moved_enough(odom_at_update_, T_odom_robot, config_.update_distance, config_.update_angle)) {
       return follow_odometry(estimate_, odom_at_update_, T_odom_robot);

@@ -28,6 +28,22 @@
 // injection setting jumped 5-35 m to look-alike corridors. A kidnapped robot's tracked set
 // explains nothing, so the recovery set takes over as soon as it has found the place.
 //
+// Global start (initialize_global), coarse to fine, sized by the map:
+// 1. Coarse pass (global_search.hpp): the first global.updates sensor updates score a grid of
+//    poses over the whole free space (0.25 m, 5 deg; coarser when the grid would exceed
+//    global.max_poses) with a wide likelihood field, each carried along the odometry; the best
+//    global.keep survive the first scan. Its cost is bounded by max_poses x beams, whatever the map.
+// 2. Places: the best max_particles hypotheses are grouped into at most max_places places
+//    (place_radius_xy, place_radius_theta), and the particles are shared equally among them.
+// 3. Clustered particle filter (A. Milstein, J. N. Sanchez, E. T. Williamson, "Robust global
+//    localization using clustered particle filtering", AAAI 2002): each place resamples within
+//    itself to an equal share, so a place cannot die because another explained a few scans a
+//    little better; its evidence is the sum over the updates of the log of the mean likelihood
+//    of its particles (p(z | place)), counted once the places have settled on their local best
+//    pose (place_settle_updates). A place place_margin below the best is dropped; places whose
+//    means meet merge. The filter is not localized while more than one place is left: it reports
+//    converged only when a single place dominates. Then plain MCL runs, KLD-sampling shrinks the set.
+//
 // One filter step (`update`): the odometry since the last filter update is accumulated; once the
 // robot has moved update_distance or turned update_angle, the particles are moved by samples of
 // the odometry motion model (motion_model.hpp, Table 5.6), weighed by the likelihood field
@@ -48,11 +64,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/rng.hpp"
+#include "slam2d/localization/global_search.hpp"
 #include "slam2d/localization/localization_map.hpp"
 #include "slam2d/localization/localizer.hpp"
 #include "slam2d/localization/motion_model.hpp"
@@ -71,7 +89,15 @@ struct MclConfig {
                                     // and a sharper posterior than the map supports jumps to look-alike places
   double usable_range = 30.0;       // m, > 0: longer readings are treated as max-range readings
   std::size_t min_particles = 500;  // >= 1
-  std::size_t max_particles = 5000; // >= min_particles; also the count of a global start
+  std::size_t max_particles = 5000; // >= min_particles; also the count a global start is seeded with
+  GlobalSearchConfig global{};      // the coarse pass of a global start (global_search.hpp)
+  // The places a global start tracks side by side (clustered particle filter, see the header):
+  std::size_t max_places = 200;     // >= 1: candidate places seeded from the coarse pass
+  double place_radius_xy = 1.0;     // m, > 0: hypotheses this close (and within place_radius_theta) are one place
+  double place_radius_theta = 0.5;  // rad, > 0
+  double place_margin = 40.0;       // log-likelihood, > 0: a place this far below the best is dropped (one end point
+                                    // explained at 0 m instead of unexplained is log(1.9 / 0.0017) = 7: about 6 end points)
+  int place_settle_updates = 10;    // >= 0: updates after seeding before the places' evidence counts (they settle on their best pose)
   bool kld_sampling = true;         // false: always max_particles
   double kld_epsilon = 0.05;        // 1, > 0: bound on the KL divergence (Fox 2003)
   double kld_z = 2.326;             // 1: upper 1 - delta quantile of N(0, 1) (delta = 0.01)
@@ -105,8 +131,15 @@ class MonteCarloLocalization : public Localizer {
 
   /// Particles drawn from a Gaussian around the pose (max(min_particles, 1000) of them).
   void initialize(const SE2& T_map_robot, const Covariance3& covariance);
-  /// max_particles uniform over the free cells and headings.
+  /// A global start: the first config.global.updates sensor updates score a grid of poses over
+  /// the whole free space (GlobalPoseSearch), then max_particles are seeded around the best.
   void initialize_global();
+  /// Whether the global start's coarse pass is still running.
+  bool searching() const { return searching_; }
+  /// Candidate places of a global start still tracked (0 once one place is left, and when tracking).
+  std::size_t places() const { return place_log_likelihood_.size(); }
+  /// The coarse pass of the last global start (null before initialize_global()).
+  const GlobalPoseSearch* global_search() const { return search_.get(); }
 
   LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
   std::size_t sensor_updates() const override { return sensor_updates_; }
@@ -161,6 +194,22 @@ class MonteCarloLocalization : public Localizer {
   /// Seeds, refreshes or drops the recovery set by the injection probability.
   void update_recovery(double p_inject);
   void drop_recovery();
+  /// A sensor update of the coarse pass; seeds the particles once it is done.
+  LocalizationEstimate search_update(const SE2& T_odom_robot, const LaserScan& scan);
+  /// Place evidence: sums each place's marginal likelihood, drops the places place_margin below
+  /// the best, and sets the weights to the place posterior times the weights within each place.
+  void weigh_places();
+  /// Resamples each place to an equal share of max_particles; merges places that met; ends the
+  /// place phase when one is left.
+  void resample_places();
+  std::unique_ptr<GlobalPoseSearch> search_;  // built by the first initialize_global()
+  bool searching_ = false;                    // the coarse pass runs
+  std::vector<std::uint32_t> place_of_;       // place of each particle while places are tracked
+  std::vector<double> place_log_likelihood_;  // summed log marginal likelihood of each place
+  std::vector<double> within_weights_;        // each particle's weight within its place
+  int place_updates_ = 0;                     // sensor updates since the places were seeded
+  SE2 odom_at_start_;                         // odometry pose at the first scan
+  bool averages_started_ = false;             // w_slow, w_fast hold a value
   bool initialized_ = false;
   bool started_ = false;          // the first scan has been used
   SE2 odom_at_update_;            // odometry pose at the last filter update
