@@ -3,8 +3,9 @@
 // (laser_scan_matcher, I. Dryanovski and W. Morris, scan_tools): each scan is matched against
 // the last keyframe scan, and becomes the new keyframe once the robot has moved
 // keyframe_distance or turned keyframe_angle from it (their kf_dist_linear = 0.1 m and
-// kf_dist_angular = 10 deg, the defaults here). Matching against a keyframe instead of the
-// previous scan keeps a slow or standing robot from integrating the matcher's noise.
+// kf_dist_angular = 10 deg, the defaults here; a leave-one-out check over Intel, ACES and FR079
+// is in docs/defaults.md). Matching against a keyframe instead of the previous scan keeps a slow
+// or standing robot from integrating the matcher's noise.
 //
 // The initial guess is the wheel odometry between the keyframe and the scan when both have it
 // (checked increment by increment: core/odometry_guard.hpp),
@@ -41,8 +42,9 @@ struct ScanOdometryConfig {
   double keyframe_distance = 0.1;          // m, >= 0: new keyframe once |t| from it reaches this (0: every scan)
   double keyframe_angle = 0.17453292519943295;  // rad, >= 0 (10 deg): ... or |theta| reaches this (0: every scan)
   double min_range = 0.0;                  // m, >= 0: readings below are dropped
-  double max_range = 30.0;                 // m, > min_range: readings at or beyond are dropped (ACES
-                                           // reports no-return as 50 m; a SICK LMS is reliable to ~30 m)
+  double max_range = 30.0;                 // m, > min_range: readings at or beyond are dropped (a SICK
+                                           // LMS is reliable to ~30 m, and logs report no-return as a
+                                           // far reading: 50 m in ACES)
   double max_guess_dt = 1.0;               // s, > 0: no constant-velocity extrapolation over longer gaps
   bool require_convergence = true;         // gate: the matcher must report converged
   double min_inlier_fraction = 0.3;        // 1, in [0, 1]: gate on inliers / usable points of the scan

@@ -42,7 +42,9 @@ struct RbpfMotionNoise {
 
 struct RbpfProposalConfig {
   HectorMatcherConfig matcher{.rotation_search_range = 0.0};  // scan matching from x' (no multi-start)
-  double likelihood_sigma = 0.3;      // 1, sigma of the residual 1 - M in the observation likelihood, > 0
+  // 1, sigma of the residual 1 - M in the observation likelihood, > 0. Picked on ACES, not yet
+  // checked on a held-out log (docs/defaults.md), as are weight_gain and the K poses' grid.
+  double likelihood_sigma = 0.3;
   // Weight tempering (GMapping's "ogain"): the weight update is log eta * weight_gain. Beams are
   // not independent, so the product over ~200 beams is far too confident; 1 is the plain filter.
   double weight_gain = 0.03;          // 1, in (0, 1]

@@ -44,8 +44,8 @@ struct RbpfConfig {
   // A hit raises the log-odds by 2.20, a miss lowers them by 0.32. The high upper clamp (log-odds
   // 6.9, reached after 4 hits) lets a wall seen many times survive about 21 passes of a drifted
   // particle's beams, so the old map can still pull the particle back when it returns, while a
-  // cell hit once (a moving object, an early mis-registration) is erased after 7 passes
-  // (docs/methods/rbpf.md, "Map update": ACES over 20 seeds, Intel over 8).
+  // cell hit once (a moving object, an early mis-registration) is erased after 7 passes. p_miss
+  // and the clamp were picked on ACES and Intel, checked on FR079 (docs/defaults.md).
   MapPyramidConfig map{.levels = 3,
                        .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.42,
                                 .probability_min = 0.12, .probability_max = 0.999, .max_clear_range = 0.0}};
@@ -53,28 +53,35 @@ struct RbpfConfig {
   RbpfMotionNoise motion{};
   double min_range = 0.1;          // m, shorter readings are dropped
   double max_range = 25.0;         // m, usable range for matching and mapping
+  // Update triggers, GMapping's linearUpdate / angularUpdate (its defaults: 1 m, 0.5 rad). These
+  // were picked on ACES, not yet checked on a held-out log (docs/defaults.md).
   double update_distance = 0.5;    // m, odometry distance that triggers an update (GMapping: linearUpdate)
   double update_angle = 0.25;      // rad, odometry rotation that triggers one (GMapping: angularUpdate)
   double update_interval = 0.0;    // s, time that triggers one; 0 disables (GMapping: temporalUpdate)
   // The scan matching of an update starts from x' (+) (start_noise sigma_u) n, n ~ N(0, I), drawn
   // per particle (GMapping's drawFromMotion); the motion prior is centred there too. 0 starts every
-  // particle at x' = x_{t-1} (+) u: the particles then barely spread and ACES's large loop stays open.
+  // particle at x' = x_{t-1} (+) u: the particles then barely spread and none reaches the old
+  // map's basin at the end of a large loop. Picked on Intel, ACES and FR079, not yet checked on a
+  // held-out log (docs/defaults.md).
   double start_noise = 0.5;        // 1, >= 0
   double resample_threshold = 0.5; // 1, resample when N_eff < this * N, in [0, 1]
   // Scan-matched odometry (not in the paper): every scan is matched against the best particle's
   // map from the odometry prediction, and the matched motions replace the wheel odometry as the
   // filter's motion input u and between updates. Wheel odometry that is wrong over a few scans
-  // (FR079) then no longer decides the prediction of a whole update step. One match per scan.
+  // (reversing logged as forward driving, docs/methods/localization.md) then no longer decides
+  // the prediction of a whole update step. One match per scan.
   bool scan_matched_odometry = true;
   // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight):
-  // weak, since wheel odometry can be wrong by 0.2 m over one scan (FR079).
+  // weak, since wheel odometry can be wrong by decimetres over one scan. Picked on FR079 and
+  // ACES, not yet checked on a held-out log (docs/defaults.md).
   double scan_odometry_prior_weight = 0.05;  // 1, >= 0
   // Rotation multi-start of that per-scan matching (HectorMatcherConfig::rotation_search_*): the
   // prediction turned by k * step, |k * step| <= scan_odometry_rotation_search, is matched on the
   // coarsest level too, and a turned start goes on when it lowers the cost by the margin. Wheel
-  // odometry's heading can be off by several degrees after one fast turn (ACES: up to 8 deg);
+  // odometry's heading can be off by several degrees after one fast turn on the spot;
   // Gauss-Newton from there settles in a wrong minimum and every particle inherits the error. The
-  // margin keeps repetitive rooms (Intel) from snapping to a wrong heading. 0 disables it.
+  // margin keeps repetitive rooms from snapping to a wrong heading. 0 disables it. Picked on ACES
+  // and Intel, checked on FR079 (docs/defaults.md).
   double scan_odometry_rotation_search = 0.2;  // rad, >= 0
   double scan_odometry_rotation_step = 0.05;   // rad, > 0
   double scan_odometry_rotation_margin = 0.2;  // 1, in [0, 1)
