@@ -299,10 +299,10 @@ std::vector<LoopClosure> LoopCloser::verify(const std::vector<Keyframe>& keyfram
   return closures;
 }
 
-// The global search: the chains within the drift radius that the local search does not cover
-// (farther than search_radius, or drifted beyond the large window), nearest first, up to
-// max_global_chains, each searched over a window that covers its drift, coarse to fine; the best
-// closure that passes the strict thresholds and lies within the drift.
+// The global search: the chains within the drift radius whose drift the large window does not
+// cover, nearest first, up to max_global_chains, each searched over a window that covers its
+// drift, coarse to fine; the best closure that passes the strict thresholds and lies within the
+// drift.
 std::optional<LoopClosure> LoopCloser::search_globally(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
                                                        std::size_t current, const Uncertainty& uncertainty) {
   const LargeClosureConfig& large = config_.large;
@@ -325,10 +325,9 @@ std::optional<LoopClosure> LoopCloser::search_globally(const std::vector<Keyfram
     }
     return r;
   };
-  std::erase_if(chains, [&](const Chain& chain) {  // the local search's
+  std::erase_if(chains, [&](const Chain& chain) {  // the large window covers their drift
     const Reach r = reach(chain);
-    return distance_to_chain(keyframes, graph, chain, estimate.translation()) <= config_.search_radius &&
-           r.drift <= largest_window(local) && r.heading <= local.window_theta;
+    return r.drift <= largest_window(local) && r.heading <= local.window_theta;
   });
   if (chains.empty()) return std::nullopt;
   const auto started = std::chrono::steady_clock::now();
