@@ -11,12 +11,12 @@
 //    odometry prediction); the tracked motion from the previous keyframe is the edge, with a small
 //    fixed covariance (a scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
 //    matches do, so the chain is stiff and the loop edges bend it only where it drifted);
-// 3. loop closure: earlier keyframes near the pose estimate (the radius grown by a drift model
-//    of the distance travelled and the angle turned since the last closure), grouped in chains,
-//    each chain's local map searched over a large window by branch-and-bound, accepted above a
-//    response threshold after a fine refinement; when the drift outgrows that window, a global
-//    search over the whole uncertainty; a large correction is confirmed by a second keyframe
-//    before it goes in (loop_closure.hpp);
+// 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
+//    local map searched over a large window by branch-and-bound, accepted above a response
+//    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
+//    model of the distance travelled and the angle turned along the graph's path between them)
+//    outgrows that window, a global search over the whole drift; a large correction is confirmed
+//    by a second keyframe before it goes in (loop_closure.hpp);
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
 //    keyframes the search interval skipped, so that a loop closing at the end of a log closes.

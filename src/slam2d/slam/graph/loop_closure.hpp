@@ -49,11 +49,11 @@ namespace slam2d {
 /// (sequential edges, and loop edges, which join revisits: a closure shortens the path to every
 /// place it links), added up, not in quadrature (systematic drift, a scale or heading bias, adds
 /// up linearly). Separate from the sequential edges' sigmas, which describe one keyframe-to-
-/// keyframe match for the optimisation. The defaults, 3 sigmas = 3 % of the distance, 0.06 %
-/// rad/m and 0.6 % of the turn, hold the tracker's drift over 99.4-100 % of keyframe pairs of
-/// runs without closure on Intel and ACES with odometry and on Intel without (ACES without
-/// odometry 90 %: its tracker jumps, no drift), checked on FR079 (99.9-100 %); see
-/// docs/methods/graph_slam.md.
+/// keyframe match for the optimisation. The defaults, 3 sigmas = 5 % of the distance and
+/// 0.0009 rad/m + 0.9 % of the turn in heading, hold the tracker's drift over 99.7-100 % of the
+/// keyframe pairs of runs without closure on Intel (with and without odometry) and ACES with
+/// odometry (ACES without: 94.8 %, its tracker jumps, which is no drift), checked on FR079
+/// (99.9-100 %); see docs/methods/graph_slam.md.
 struct DriftModel {
   double translation_per_metre = 0.0167;  // m per m travelled, >= 0
   double rotation_per_metre = 0.0003;     // rad per m travelled, >= 0
@@ -105,7 +105,7 @@ struct LargeClosureConfig {
   bool global_search = true;
   int global_interval = 16;        // keyframes, >= 1: at most one global search per this many
   double max_global_radius = 50.0;  // m, > 0: candidates within search_radius + the drift radius, up to this
-  double max_global_window = 25.0;  // m, > 0: translation half-width, the uncertainty radius up to this
+  double max_global_window = 25.0;  // m, > 0: translation half-width, the chain's drift radius up to this
   int max_global_chains = 1;        // 1, >= 1: chains searched per global search, nearest first
   // The coarse search: a 10 cm table under a 10 cm kernel, 0.57 deg steps (a point 10 m out moves
   // one cell per step), no refinement; its window is set per search.
@@ -197,10 +197,10 @@ struct LoopCloserStats {
   std::size_t attempts = 0;              // chains searched over the large window
   std::size_t global_searches = 0;
   std::size_t global_chains = 0;         // chains searched by global searches
-  std::size_t global_closures = 0;       // confirmed large corrections first found by a global search
+  std::size_t global_closures = 0;       // confirmed closures first found by a global search
   std::size_t large_closures = 0;        // confirmed large corrections (global or local)
   std::size_t unconfirmed = 0;           // large corrections dropped for want of a confirmation
-  double global_seconds = 0.0;           // CPU time of the global searches
+  double global_seconds = 0.0;           // wall time of the global searches
 };
 
 /// Throws Error for out-of-range values.
