@@ -1,8 +1,8 @@
 // Graph SLAM (slam/graph) on the ACES log of Kuemmerle et al. 2009, the default configuration:
 // loops are closed, and the relation error stays under bounds a little above what was measured
 // (0.0370 m, 0.344 deg; bench/BENCHMARKS.md has every log), far under Hector's 0.095 m on it.
-// And a loop that closes at the end of a log: ACES without odometry cut 1 s after the robot
-// comes back to a corridor it mapped 740 s before, about 3.6 m off. Intel and FR079 take 8-11 s
+// And a loop that closes at the end of a log: ACES without odometry cut as the robot comes back,
+// about 3.6 m off, to a corridor it mapped 560 s before. Intel and FR079 take 8-11 s
 // each and are left to the dataset benchmark.
 
 #include <gtest/gtest.h>
@@ -65,9 +65,9 @@ TEST(GraphSlamRealData, ClosesTheLoopsOfAces) {
 }
 
 // Without odometry the tracker drifts 3.6 m around ACES's second large loop; the log cut at
-// 1045 s ends 1 s after the robot is back in the corridor of 300 s: only finish()'s search from
-// the last keyframes closes the loop, a large correction confirmed by a second keyframe (the
-// searches before the change left the end 3.56 m off the reference, measured).
+// 1045 s ends just before the keyframe whose search closes the loop in the full run (back in the
+// corridor of 489 s): only finish()'s search from the last keyframes closes it, a large correction
+// confirmed by a second keyframe (the code before left the end 3.56 m off the reference, measured).
 TEST(GraphSlamRealData, ClosesALoopAtTheEndOfACutLog) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const GraphSlam cut = map_log(data / "aces/aces.clf.gz", false, 1045.0);
