@@ -1,5 +1,6 @@
 #include "slam2d/slam/graph/graph_slam.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -85,7 +86,7 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
     add_keyframe(scan, estimate, first || step.matched);
     T_tracker_keyframe_ = tracked.T_map_robot;
     step.keyframe = true;
-    step.loop_closures = close_loops();
+    step.loop_closures = close_loops(keyframes_.size() - 1, false);
   } else {
     const std::size_t keyframe = keyframes_.size() - 1;
     scans_.push_back({scan.stamp, keyframe, graph_.poses[keyframes_[keyframe].node].between(estimate)});
@@ -116,7 +117,6 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool ma
         covariance_from_sigmas(sigma_translation, sigma_translation, config_.sequential_sigma_rotation);
     edge.information = information_from_covariance(covariance);
     graph_.edges.push_back(edge);
-    uncertainty_variance_ += covariance(0, 0) + covariance(1, 1);
     keyframe_motion_.push_back(edge.T_from_to);
     if (!matched) ++stats_.sequential_failures;
   }
@@ -128,25 +128,40 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool ma
   ++stats_.keyframes;
 }
 
-void GraphSlam::add_closure(const LoopClosure& closure) {
-  graph_.edges.push_back(closure.edge);
-  ++(closure.near ? stats_.near_links : stats_.loop_closures);
-}
-
-int GraphSlam::close_loops() {
-  const double radius = config_.loop_closure.uncertainty_sigmas * std::sqrt(uncertainty_variance_);
-  const std::vector<LoopClosure> closures =
-      loop_closer_.close(keyframes_, graph_, keyframes_.size() - 1, radius, &stats_.loop_attempts);
+// Adds the closures' edges; the graph is optimised when one of them closes a loop (a near link
+// only keeps the chain in place).
+int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final) {
   bool loop_closed = false;
   for (const LoopClosure& closure : closures) {
-    add_closure(closure);
-    loop_closed = loop_closed || !closure.near;
+    graph_.edges.push_back(closure.edge);
+    if (closure.near()) {
+      ++stats_.near_links;
+      continue;
+    }
+    ++stats_.loop_closures;
+    if (final) ++stats_.final_search_closures;
+    loop_closed = true;
   }
-  if (loop_closed) {
-    optimize();
-    uncertainty_variance_ = 0.0;
-  }
+  if (loop_closed) optimize();
   return static_cast<int>(closures.size());
+}
+
+int GraphSlam::close_loops(std::size_t current, bool final) {
+  const auto started = std::chrono::steady_clock::now();
+  const std::vector<LoopClosure> closures = loop_closer_.close(keyframes_, graph_, current, final);
+  stats_.loop_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  copy_loop_stats();
+  return add_closures(closures, final);
+}
+
+void GraphSlam::copy_loop_stats() {
+  const LoopCloserStats& loops = loop_closer_.stats();
+  stats_.loop_attempts = loops.attempts;
+  stats_.global_searches = loops.global_searches;
+  stats_.global_closures = loops.global_closures;
+  stats_.large_closures = loops.large_closures;
+  stats_.unconfirmed_closures = loops.unconfirmed;
+  stats_.global_search_seconds = loops.global_seconds;
 }
 
 void GraphSlam::optimize() {
@@ -156,7 +171,9 @@ void GraphSlam::optimize() {
 }
 
 void GraphSlam::finish() {
-  if (const auto pending = loop_closer_.release()) add_closure(*pending);
+  for (std::size_t k = loop_closer_.first_unsearched(); k < keyframes_.size(); ++k) close_loops(k, true);
+  add_closures(loop_closer_.release(), true);
+  copy_loop_stats();
   if (graph_.poses.size() > 1) optimize();
 }
 

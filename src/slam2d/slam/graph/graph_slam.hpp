@@ -13,9 +13,13 @@
 //    matches do, so the chain is stiff and the loop edges bend it only where it drifted);
 // 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
 //    local map searched over a large window by branch-and-bound, accepted above a response
-//    threshold after a fine refinement (loop_closure.hpp);
+//    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
+//    model of the distance travelled and the angle turned along the graph's path between them)
+//    outgrows that window, a global search over the whole drift; a large correction is confirmed
+//    by a second keyframe before it goes in (loop_closure.hpp);
 // 4. back end: sparse pose adjustment after every loop closure and at the end
-//    (optim/sparse_pose_adjustment.hpp), warm-started.
+//    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
+//    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
 // Every scan gets a pose: keyframes their optimised node, the scans between two keyframes their
 // tracked motion, bent to meet both optimised ends.
 
@@ -69,13 +73,19 @@ struct GraphSlamStep {
 struct GraphSlamStats {
   std::size_t scans = 0;
   std::size_t keyframes = 0;
-  std::size_t loop_closures = 0;        // loop edges found over the large window
+  std::size_t loop_closures = 0;        // loop edges (the large window, global searches, confirmations)
   std::size_t near_links = 0;           // loop edges to near chains (small window)
   std::size_t loop_attempts = 0;        // chains searched over the large window
+  std::size_t global_searches = 0;      // searches over the whole drift uncertainty
+  std::size_t global_closures = 0;      // closures first found by a global search and confirmed
+  std::size_t large_closures = 0;       // large corrections confirmed (each adds two loop edges)
+  std::size_t unconfirmed_closures = 0; // large corrections dropped for want of a confirmation
+  std::size_t final_search_closures = 0;  // loop edges added by finish()
   std::size_t optimizations = 0;
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
-  double optimization_seconds = 0.0;
-  double loop_seconds = 0.0;
+  double optimization_seconds = 0.0;    // wall time of the back end
+  double loop_seconds = 0.0;            // wall time of loop closing (searches and verification)
+  double global_search_seconds = 0.0;   // wall time of the global searches (part of loop_seconds)
 };
 
 class GraphSlam {
@@ -86,7 +96,9 @@ class GraphSlam {
   /// it for every scan or for none: the tracker's prior is chosen at the first scan). Throws Error
   /// when odometry stops midway.
   GraphSlamStep add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot = std::nullopt);
-  /// Closes a pending delayed loop and runs the final optimisation.
+  /// Searches for loop closures from every keyframe since the last large-window search (the last
+  /// keyframes of a log, which the search interval skipped), closes a pending delayed loop or
+  /// unconfirmed large correction when it can, and runs the final optimisation.
   void finish();
 
   /// One pose per scan added, stamped with the scan's stamp (keyframes optimised, the others
@@ -111,8 +123,9 @@ class GraphSlam {
   PointCloud2 scan_cloud(const LaserScan& scan) const;
   HectorStep track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot);
   void add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched);
-  int close_loops();
-  void add_closure(const LoopClosure& closure);
+  int close_loops(std::size_t current, bool final);
+  int add_closures(const std::vector<LoopClosure>& closures, bool final);
+  void copy_loop_stats();
   void optimize();
   SE2 current_pose() const;
   SE2 interpolated_pose(const ScanRecord& record) const;
@@ -129,7 +142,6 @@ class GraphSlam {
   GraphSlamStats stats_;
   std::optional<HectorSlam> tracker_;  // made at the first scan, when it is known whether odometry comes
   SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
-  double uncertainty_variance_ = 0.0;  // m^2, position variance accumulated since the last loop closure
 };
 
 }  // namespace slam2d

@@ -3,22 +3,56 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <queue>
 
+#include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 
 namespace slam2d {
 
+Drift drift_along(const GraphPath& path, const DriftModel& model) {
+  return {.translation = model.translation_per_metre * path.distance,
+          .rotation = model.rotation_per_metre * path.distance + model.rotation_per_radian * path.turned};
+}
+
+void validate(const DriftModel& model) {
+  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  check(non_negative(model.translation_per_metre) && non_negative(model.rotation_per_metre) &&
+            non_negative(model.rotation_per_radian),
+        "loop closure: the drift model's rates must be >= 0");
+}
+
+void validate(const LargeClosureConfig& config) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  auto fraction = [](double v) { return v >= 0.0 && v <= 1.0; };
+  check(positive(config.min_translation) && positive(config.min_rotation),
+        "loop closure: large.min_translation and large.min_rotation must be > 0");
+  check(fraction(config.min_score) && fraction(config.min_inlier_fraction),
+        "loop closure: large.min_score and large.min_inlier_fraction must be in [0, 1]");
+  check(std::isfinite(config.confirm_min_distance) && config.confirm_min_distance >= 0.0 &&
+            std::isfinite(config.confirm_max_distance) && config.confirm_max_distance >= config.confirm_min_distance,
+        "loop closure: need 0 <= large.confirm_min_distance <= large.confirm_max_distance");
+  check(positive(config.confirm_tolerance) && positive(config.confirm_rotation_tolerance),
+        "loop closure: large.confirm_tolerance and large.confirm_rotation_tolerance must be > 0");
+  check(config.global_interval >= 1, "loop closure: large.global_interval must be >= 1");
+  check(positive(config.max_global_radius) && positive(config.max_global_window),
+        "loop closure: large.max_global_radius and large.max_global_window must be > 0");
+  check(config.max_global_chains >= 1, "loop closure: large.max_global_chains must be >= 1");
+  validate(config.confirm_match);
+  validate(config.global_coarse);
+  validate(config.global_fine);
+}
+
 void validate(const LoopClosureConfig& config) {
   check(std::isfinite(config.search_radius) && config.search_radius > 0.0, "loop closure: search_radius must be > 0");
   check(std::isfinite(config.uncertainty_sigmas) && config.uncertainty_sigmas >= 0.0,
         "loop closure: uncertainty_sigmas must be >= 0");
-  check(std::isfinite(config.max_search_radius) && config.max_search_radius >= config.search_radius,
-        "loop closure: max_search_radius must be >= search_radius");
   check(std::isfinite(config.min_path_distance) && config.min_path_distance >= 0.0,
         "loop closure: min_path_distance must be >= 0");
   check(std::isfinite(config.map_radius) && config.map_radius > 0.0, "loop closure: map_radius must be > 0");
@@ -30,35 +64,51 @@ void validate(const LoopClosureConfig& config) {
   check(config.search_interval >= 1, "loop closure: search_interval must be >= 1");
   check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0,
         "loop closure: min_inlier_fraction must be in [0, 1]");
+  validate(config.drift);
   validate(config.match);
+  validate(config.near_match);
+  validate(config.large);
 }
 
-std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance) {
-  std::vector<std::vector<std::pair<std::size_t, double>>> adjacent(graph.size());
+std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, double max_distance) {
+  struct Step {
+    std::size_t to;
+    double length, turn;
+  };
+  std::vector<std::vector<Step>> adjacent(graph.size());
   for (const PoseGraphEdge& edge : graph.edges) {
     const double length = edge.T_from_to.translation().norm();
-    adjacent[static_cast<std::size_t>(edge.from)].emplace_back(static_cast<std::size_t>(edge.to), length);
-    adjacent[static_cast<std::size_t>(edge.to)].emplace_back(static_cast<std::size_t>(edge.from), length);
+    const double turn = std::abs(edge.T_from_to.theta());
+    adjacent[static_cast<std::size_t>(edge.from)].push_back({static_cast<std::size_t>(edge.to), length, turn});
+    adjacent[static_cast<std::size_t>(edge.to)].push_back({static_cast<std::size_t>(edge.from), length, turn});
   }
-  std::vector<double> distance(graph.size(), std::numeric_limits<double>::infinity());
-  std::vector<bool> reached(graph.size(), false);
+  constexpr double kUnreached = std::numeric_limits<double>::infinity();
+  std::vector<GraphPath> paths(graph.size(), GraphPath{.distance = kUnreached, .turned = kUnreached});
+  std::vector<bool> done(graph.size(), false);
   using Entry = std::pair<double, std::size_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
-  distance[source] = 0.0;
+  paths[source] = {};
   queue.emplace(0.0, source);
   while (!queue.empty()) {
-    const auto [d, node] = queue.top();
+    const std::size_t node = queue.top().second;
     queue.pop();
-    if (reached[node]) continue;
-    reached[node] = true;
-    for (const auto& [next, length] : adjacent[node]) {
-      const double candidate = d + length;
-      if (candidate <= max_distance && candidate < distance[next]) {
-        distance[next] = candidate;
-        queue.emplace(candidate, next);
+    if (done[node]) continue;
+    done[node] = true;
+    for (const Step& step : adjacent[node]) {
+      const double distance = paths[node].distance + step.length;
+      if (distance <= max_distance && distance < paths[step.to].distance) {
+        paths[step.to] = {.distance = distance, .turned = paths[node].turned + step.turn};
+        queue.emplace(distance, step.to);
       }
     }
   }
+  return paths;
+}
+
+std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance) {
+  const std::vector<GraphPath> paths = graph_paths(graph, source, max_distance);
+  std::vector<bool> reached(paths.size());
+  for (std::size_t n = 0; n < paths.size(); ++n) reached[n] = paths[n].distance <= max_distance;
   return reached;
 }
 
@@ -79,25 +129,40 @@ std::vector<std::pair<std::size_t, std::size_t>> group_into_chains(const std::ve
 
 LoopCloser::LoopCloser(const LoopClosureConfig& config) : config_(config) { validate(config_); }
 
+// Per earlier keyframe, from the current one: the search radius and heading window the drift
+// allows (uncertainty_sigmas sigmas), and whether the graph already links it (near).
+struct LoopCloser::Uncertainty {
+  std::vector<double> radius;   // m
+  std::vector<double> heading;  // rad
+  std::vector<bool> linked;
+};
+
 namespace {
+
+using Chain = std::pair<std::size_t, std::size_t>;
 
 const SE2& node_pose(const PoseGraph& graph, const Keyframe& keyframe) { return graph.poses[keyframe.node]; }
 
-// Step 1: the keyframes near the estimate, outside the recent chain (ascending).
+// Step 1: the keyframes k within radius(k) of `center`, outside the recent chain of `current` (ascending).
 std::vector<std::size_t> loop_candidates(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                         std::size_t current, double radius, double min_path_distance) {
-  const Eigen::Vector2d here = node_pose(graph, keyframes[current]).translation();
+                                         std::size_t current, const Eigen::Vector2d& center,
+                                         const std::function<double(std::size_t)>& radius, double min_path_distance) {
   const double path_here = keyframes[current].path_distance;
   std::vector<std::size_t> candidates;
   for (std::size_t k = 0; k < current; ++k) {
     if (path_here - keyframes[k].path_distance < min_path_distance) break;  // path distance grows with k
-    if ((node_pose(graph, keyframes[k]).translation() - here).norm() <= radius) candidates.push_back(k);
+    if ((node_pose(graph, keyframes[k]).translation() - center).norm() <= radius(k)) candidates.push_back(k);
   }
   return candidates;
 }
 
-double distance_to_chain(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                         std::pair<std::size_t, std::size_t> chain, const Eigen::Vector2d& point) {
+// The constant radius of the local search and of confirmations.
+std::function<double(std::size_t)> constant(double radius) {
+  return [radius](std::size_t) { return radius; };
+}
+
+double distance_to_chain(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, Chain chain,
+                         const Eigen::Vector2d& point) {
   double nearest = std::numeric_limits<double>::infinity();
   for (std::size_t k = chain.first; k < chain.second; ++k) {
     nearest = std::min(nearest, (node_pose(graph, keyframes[k]).translation() - point).norm());
@@ -105,8 +170,8 @@ double distance_to_chain(const std::vector<Keyframe>& keyframes, const PoseGraph
   return nearest;
 }
 
-std::size_t nearest_keyframe(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                             std::pair<std::size_t, std::size_t> chain, const Eigen::Vector2d& point) {
+std::size_t nearest_keyframe(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, Chain chain,
+                             const Eigen::Vector2d& point) {
   std::size_t best = chain.first;
   for (std::size_t k = chain.first; k < chain.second; ++k) {
     if ((node_pose(graph, keyframes[k]).translation() - point).squaredNorm() <
@@ -117,27 +182,66 @@ std::size_t nearest_keyframe(const std::vector<Keyframe>& keyframes, const PoseG
   return best;
 }
 
+bool is_linked(const std::vector<Keyframe>& keyframes, const std::vector<bool>& linked, Chain chain) {
+  for (std::size_t k = chain.first; k < chain.second; ++k) {
+    if (linked[keyframes[k].node]) return true;
+  }
+  return false;
+}
+
+// Steps 1-2 around `center`: the chains of keyframes k within radius(k), nearest first, without
+// those the graph already links to `current` unless asked (they are near chains, no loop).
+std::vector<Chain> chains_around(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current,
+                                 const Eigen::Vector2d& center, const std::function<double(std::size_t)>& radius,
+                                 const LoopClosureConfig& config, const std::vector<bool>& linked, bool keep_linked) {
+  std::vector<Chain> chains = group_into_chains(
+      loop_candidates(keyframes, graph, current, center, radius, config.min_path_distance), config.min_chain_size);
+  if (!keep_linked) std::erase_if(chains, [&](const Chain& chain) { return is_linked(keyframes, linked, chain); });
+  std::sort(chains.begin(), chains.end(), [&](const Chain& a, const Chain& b) {
+    return distance_to_chain(keyframes, graph, a, center) < distance_to_chain(keyframes, graph, b, center);
+  });
+  return chains;
+}
+
+double largest_window(const CorrelativeConfig& correlative) {
+  return std::max(correlative.window_x, correlative.window_y);
+}
+
 }  // namespace
 
+// Step 3: the keyframe's scan matched against the chain's map from `guess` (coarse to fine when a
+// coarse configuration is given), and the edge from the chain's keyframe nearest to the match.
 std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                                   std::size_t current, std::pair<std::size_t, std::size_t> chain,
-                                                   const MapMatchConfig& match_config) const {
+                                                   std::size_t current, Chain chain, const SE2& guess,
+                                                   const MapMatchConfig& match_config,
+                                                   const MapMatchConfig* coarse) const {
   std::vector<const Keyframe*> members;
   std::vector<SE2> poses;
   for (std::size_t k = chain.first; k < chain.second; ++k) {
     members.push_back(&keyframes[k]);
     poses.push_back(node_pose(graph, keyframes[k]));
   }
-  const SE2& guess = node_pose(graph, keyframes[current]);
-  const double map_radius = config_.map_radius + std::max(match_config.correlative.window_x, match_config.correlative.window_y);
-  const MatchMap map = make_match_map(map_cloud(members, poses, guess.translation(), map_radius, match_config.map_voxel), match_config);
-  const MapMatchResult match = match_scan_to_map(map, keyframes[current].cloud, guess, match_config);
+  const PointCloud2& scan = keyframes[current].cloud;
+  SE2 start = guess;
+  if (coarse != nullptr) {
+    const double radius = config_.map_radius + largest_window(coarse->correlative);
+    const MatchMap map =
+        make_match_map(map_cloud(members, poses, guess.translation(), radius, coarse->map_voxel), *coarse);
+    const MapMatchResult found = match_scan_to_map(map, scan, guess, *coarse);
+    if (!found.converged) return std::nullopt;
+    start = found.T_map_robot;
+  }
+  const double radius = config_.map_radius + largest_window(match_config.correlative);
+  const MatchMap map =
+      make_match_map(map_cloud(members, poses, start.translation(), radius, match_config.map_voxel), match_config);
+  const MapMatchResult match = match_scan_to_map(map, scan, start, match_config);
   if (!match.converged || !match.refined || match.inlier_fraction < config_.min_inlier_fraction) return std::nullopt;
   if (config_.reject_degenerate && match.degenerate) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> translation(match.covariance.topLeftCorner<2, 2>());
   if (translation.eigenvalues().maxCoeff() > config_.max_translation_variance) return std::nullopt;
   const std::size_t anchor = nearest_keyframe(keyframes, graph, chain, match.T_map_robot.translation());
   const SE2& T_map_anchor = node_pose(graph, keyframes[anchor]);
+  const SE2& estimate = node_pose(graph, keyframes[current]);
   LoopClosure closure;
   closure.edge.from = static_cast<int>(keyframes[anchor].node);
   closure.edge.to = static_cast<int>(keyframes[current].node);
@@ -146,39 +250,178 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
   closure.edge.information = information_from_covariance(rotate_covariance(match.covariance, -T_map_anchor.theta()));
   closure.edge.robust = true;
   closure.score = match.score;
+  closure.inlier_fraction = match.inlier_fraction;
+  closure.keyframe = current;
+  closure.anchor = anchor;
   closure.chain_begin = chain.first;
   closure.chain_end = chain.second;
+  closure.T_map_matched = match.T_map_robot;
+  closure.correction_translation = (match.T_map_robot.translation() - estimate.translation()).norm();
+  closure.correction_rotation = std::abs(angle_difference(match.T_map_robot.theta(), estimate.theta()));
   return closure;
 }
 
+LoopCloser::Uncertainty LoopCloser::uncertainty(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                                std::size_t current) const {
+  const std::vector<GraphPath> paths = graph_paths(graph, keyframes[current].node);
+  Uncertainty uncertainty;
+  uncertainty.radius.resize(paths.size());
+  uncertainty.heading.resize(paths.size());
+  uncertainty.linked.resize(paths.size());
+  for (std::size_t n = 0; n < paths.size(); ++n) {
+    const Drift drift = drift_along(paths[n], config_.drift);
+    uncertainty.radius[n] = config_.uncertainty_sigmas * drift.translation;
+    uncertainty.heading[n] = config_.uncertainty_sigmas * drift.rotation;
+    uncertainty.linked[n] = paths[n].distance <= config_.min_path_distance;
+  }
+  return uncertainty;
+}
+
 std::vector<LoopClosure> LoopCloser::verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                            std::size_t current, double uncertainty_radius,
-                                            std::size_t* attempts) const {
-  const double radius = std::min(config_.max_search_radius, config_.search_radius + uncertainty_radius);
-  const Eigen::Vector2d here = node_pose(graph, keyframes[current]).translation();
-  auto chains = group_into_chains(loop_candidates(keyframes, graph, current, radius, config_.min_path_distance),
-                                  config_.min_chain_size);
-  if (chains.empty()) return {};
-  std::sort(chains.begin(), chains.end(), [&](const auto& a, const auto& b) {
-    return distance_to_chain(keyframes, graph, a, here) < distance_to_chain(keyframes, graph, b, here);
-  });
-  const std::vector<bool> linked =
-      nodes_within_graph_distance(graph, keyframes[current].node, config_.min_path_distance);
-  const bool search_large_window = current % static_cast<std::size_t>(config_.search_interval) == 0;
+                                            std::size_t current, const Uncertainty& uncertainty,
+                                            bool search_large_window) {
+  const SE2& estimate = node_pose(graph, keyframes[current]);
+  const std::vector<Chain> chains = chains_around(keyframes, graph, current, estimate.translation(),
+                                                  constant(config_.search_radius), config_, uncertainty.linked, true);
   int loops = search_large_window ? 0 : config_.max_chains;
   int near = 0;
   std::vector<LoopClosure> closures;
-  for (const auto& chain : chains) {
-    bool is_near = false;
-    for (std::size_t k = chain.first; k < chain.second && !is_near; ++k) is_near = linked[keyframes[k].node];
+  for (const Chain& chain : chains) {
+    const bool is_near = is_linked(keyframes, uncertainty.linked, chain);
     if (is_near ? near++ >= config_.max_near_chains : loops++ >= config_.max_chains) continue;
-    if (attempts != nullptr && !is_near) ++*attempts;
-    auto closure = match_chain(keyframes, graph, current, chain, is_near ? config_.near_match : config_.match);
+    if (!is_near) ++stats_.attempts;
+    auto closure =
+        match_chain(keyframes, graph, current, chain, estimate, is_near ? config_.near_match : config_.match);
     if (!closure) continue;
-    closure->near = is_near;
+    closure->search = is_near ? LoopSearch::kNear : LoopSearch::kLocal;
     closures.push_back(*closure);
   }
   return closures;
+}
+
+// The global search: the chains within the drift radius whose drift the large window does not
+// cover, nearest first, up to max_global_chains, each searched over a window that covers its
+// drift, coarse to fine; the best closure that passes the strict thresholds and lies within the
+// drift.
+std::optional<LoopClosure> LoopCloser::search_globally(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                                       std::size_t current, const Uncertainty& uncertainty) {
+  const LargeClosureConfig& large = config_.large;
+  const CorrelativeConfig& local = config_.match.correlative;
+  const auto radius = [&](std::size_t k) {
+    return std::min(large.max_global_radius, config_.search_radius + uncertainty.radius[keyframes[k].node]);
+  };
+  const SE2& estimate = node_pose(graph, keyframes[current]);
+  std::vector<Chain> chains =
+      chains_around(keyframes, graph, current, estimate.translation(), radius, config_, uncertainty.linked, false);
+  struct Reach {
+    double drift = 0.0;    // m, the largest drift radius of the chain's keyframes
+    double heading = 0.0;  // rad
+  };
+  const auto reach = [&](const Chain& chain) {
+    Reach r;
+    for (std::size_t k = chain.first; k < chain.second; ++k) {
+      r.drift = std::max(r.drift, uncertainty.radius[keyframes[k].node]);
+      r.heading = std::max(r.heading, uncertainty.heading[keyframes[k].node]);
+    }
+    return r;
+  };
+  std::erase_if(chains, [&](const Chain& chain) {  // the large window covers their drift
+    const Reach r = reach(chain);
+    return r.drift <= largest_window(local) && r.heading <= local.window_theta;
+  });
+  if (chains.empty()) return std::nullopt;
+  const auto started = std::chrono::steady_clock::now();
+  ++stats_.global_searches;
+  last_global_ = current;
+  std::optional<LoopClosure> best;
+  for (std::size_t c = 0; c < chains.size() && c < static_cast<std::size_t>(large.max_global_chains); ++c) {
+    const Reach r = reach(chains[c]);
+    MapMatchConfig coarse = large.global_coarse;
+    coarse.correlative.window_x = coarse.correlative.window_y =
+        std::clamp(r.drift, largest_window(local), large.max_global_window);
+    coarse.correlative.window_theta = std::clamp(r.heading, local.window_theta, std::numbers::pi);
+    ++stats_.global_chains;
+    auto closure = match_chain(keyframes, graph, current, chains[c], estimate, large.global_fine, &coarse);
+    if (!closure || !passes_strict(*closure) || !within_drift(*closure, uncertainty)) continue;
+    if (!best || closure->score > best->score) best = closure;
+  }
+  if (best) best->search = LoopSearch::kGlobal;
+  stats_.global_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return best;
+}
+
+// The second keyframe of a large correction: matched over a small window at the pose the first
+// closure's correction predicts for it, against the chains around that pose.
+std::optional<LoopClosure> LoopCloser::confirm(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                               std::size_t current) const {
+  const LoopClosure& first = *pending_large_;
+  const LargeClosureConfig& large = config_.large;
+  const double apart = std::abs(keyframes[current].path_distance - keyframes[first.keyframe].path_distance);
+  if (current == first.keyframe || apart < large.confirm_min_distance || apart > large.confirm_max_distance) {
+    return std::nullopt;
+  }
+  // The correction the first closure claims, T_matched * T_estimate^-1 in the map frame, with the
+  // graph as it is now (the edge is relative to its anchor).
+  const SE2 T_map_matched = node_pose(graph, keyframes[first.anchor]) * first.edge.T_from_to;
+  const SE2 correction = T_map_matched * node_pose(graph, keyframes[first.keyframe]).inverse();
+  const SE2 guess = correction * node_pose(graph, keyframes[current]);
+  const std::vector<bool> linked =
+      nodes_within_graph_distance(graph, keyframes[current].node, config_.min_path_distance);
+  const std::vector<Chain> chains = chains_around(keyframes, graph, current, guess.translation(),
+                                                  constant(config_.search_radius), config_, linked, false);
+  for (std::size_t c = 0; c < chains.size() && c < static_cast<std::size_t>(config_.max_chains); ++c) {
+    auto closure = match_chain(keyframes, graph, current, chains[c], guess, large.confirm_match);
+    if (!closure || !passes_strict(*closure)) continue;
+    const SE2 disagreement = guess.between(closure->T_map_matched);
+    if (disagreement.translation().norm() > large.confirm_tolerance ||
+        std::abs(disagreement.theta()) > large.confirm_rotation_tolerance) {
+      continue;
+    }
+    closure->search = LoopSearch::kConfirmation;
+    return closure;
+  }
+  return std::nullopt;
+}
+
+// A large correction confirmed by a keyframe before it (the nearest first): at once when it is
+// found, and at the end of a log, when no keyframe after it could.
+std::optional<LoopClosure> LoopCloser::confirm_before(const std::vector<Keyframe>& keyframes,
+                                                      const PoseGraph& graph) const {
+  const std::size_t first = pending_large_->keyframe;
+  for (std::size_t k = first; k-- > 0;) {
+    if (keyframes[first].path_distance - keyframes[k].path_distance > config_.large.confirm_max_distance) break;
+    if (auto second = confirm(keyframes, graph, k)) return second;
+  }
+  return std::nullopt;
+}
+
+bool LoopCloser::is_large(const LoopClosure& closure) const {
+  return closure.correction_translation > config_.large.min_translation ||
+         closure.correction_rotation > config_.large.min_rotation;
+}
+
+bool LoopCloser::passes_strict(const LoopClosure& closure) const {
+  return closure.score >= config_.large.min_score && closure.inlier_fraction >= config_.large.min_inlier_fraction;
+}
+
+// A large correction must lie within the drift the model allows between the keyframe and the
+// chain's keyframe it links to.
+bool LoopCloser::within_drift(const LoopClosure& closure, const Uncertainty& uncertainty) const {
+  const auto anchor = static_cast<std::size_t>(closure.edge.from);  // its node
+  return closure.correction_translation <= std::max(config_.large.min_translation, uncertainty.radius[anchor]) &&
+         closure.correction_rotation <= std::max(config_.large.min_rotation, uncertainty.heading[anchor]);
+}
+
+// A large correction and its confirmation go in together, without the robust kernel (which would
+// hardly let them pull); a global closure that turned out small keeps the kernel.
+std::vector<LoopClosure> LoopCloser::confirmed(LoopClosure second) {
+  LoopClosure first = *pending_large_;
+  pending_large_.reset();
+  const bool large = is_large(first) || is_large(second);
+  first.edge.robust = second.edge.robust = !large;
+  if (large) ++stats_.large_closures;
+  if (first.search == LoopSearch::kGlobal) ++stats_.global_closures;
+  return {first, second};
 }
 
 std::vector<LoopClosure> LoopCloser::delay(std::vector<LoopClosure> verified) {
@@ -198,16 +441,60 @@ std::vector<LoopClosure> LoopCloser::delay(std::vector<LoopClosure> verified) {
 }
 
 std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                           std::size_t current, double uncertainty_radius, std::size_t* attempts) {
+                                           std::size_t current, bool final) {
   if (!config_.enabled) return {};
-  std::vector<LoopClosure> verified = verify(keyframes, graph, current, uncertainty_radius, attempts);
-  if (!config_.delayed) return verified;
-  return delay(std::move(verified));
+  const LargeClosureConfig& large = config_.large;
+  // A large correction waiting for its confirmation: confirmed from here, or dropped when too far.
+  if (pending_large_) {
+    if (auto second = confirm(keyframes, graph, current)) return confirmed(*second);
+    const double apart = keyframes[current].path_distance - keyframes[pending_large_->keyframe].path_distance;
+    if (apart > large.confirm_max_distance) {
+      pending_large_.reset();
+      ++stats_.unconfirmed;
+    }
+  }
+  const bool search_large_window = final || current % static_cast<std::size_t>(config_.search_interval) == 0;
+  if (!search_large_window && config_.max_near_chains == 0) return {};
+  if (search_large_window) last_searched_ = current;
+  const Uncertainty drift = uncertainty(keyframes, graph, current);
+  std::vector<LoopClosure> closures;
+  std::vector<LoopClosure> loops;
+  std::optional<LoopClosure> large_found;
+  for (LoopClosure& closure : verify(keyframes, graph, current, drift, search_large_window)) {
+    if (closure.near()) {
+      closures.push_back(closure);
+    } else if (!is_large(closure)) {
+      loops.push_back(closure);
+    } else if (passes_strict(closure) && within_drift(closure, drift) &&
+               (!large_found || closure.score > large_found->score)) {
+      large_found = closure;
+    }
+  }
+  // Nothing found where the estimate is: chains whose drift the large window does not cover.
+  const bool global_due =
+      final || !last_global_ || current >= *last_global_ + static_cast<std::size_t>(large.global_interval);
+  if (search_large_window && large.global_search && loops.empty() && !large_found && !pending_large_ && global_due) {
+    large_found = search_globally(keyframes, graph, current, drift);
+  }
+  if (config_.delayed) loops = delay(std::move(loops));
+  closures.insert(closures.end(), loops.begin(), loops.end());
+  if (large_found && !pending_large_) {
+    pending_large_ = large_found;
+    if (auto second = confirm_before(keyframes, graph)) {
+      for (const LoopClosure& closure : confirmed(*second)) closures.push_back(closure);
+    }
+  }
+  return closures;
 }
 
-std::optional<LoopClosure> LoopCloser::release() {
-  std::optional<LoopClosure> released = pending_;
+std::vector<LoopClosure> LoopCloser::release() {
+  std::vector<LoopClosure> released;
+  if (pending_) released.push_back(*pending_);
   pending_.reset();
+  if (pending_large_) {  // the log ended before a keyframe further on could confirm it
+    pending_large_.reset();
+    ++stats_.unconfirmed;
+  }
   return released;
 }
 

@@ -3,8 +3,9 @@
 // search of W. Hess, D. Kohler, H. Rapp, D. Andor, "Real-time loop closure in 2D LIDAR SLAM",
 // ICRA 2016, Sec. V):
 // 1. candidates: earlier keyframes within a search radius of the new keyframe's estimate, the
-//    radius grown by the position uncertainty accumulated since the last closure, leaving out the
-//    recent chain (keyframes fewer than min_path_distance metres of travel back);
+//    radius grown by the drift the two estimates may have gathered apart (DriftModel, along the
+//    graph's shortest path between them), leaving out the recent chain (keyframes fewer than
+//    min_path_distance metres of travel back);
 // 2. chains: the candidates grouped into runs of consecutive keyframes, at least min_chain_size
 //    long (a single old scan is too weak a witness);
 // 3. verification, nearest chain first: the chain's points rasterised into a local map, the new
@@ -17,8 +18,23 @@
 // Delayed loop closure (the 2015 study's change to Karto, optional): a verified closure is kept
 // while the next keyframes' closures to the same chain keep improving the response, and added
 // when they stop.
+//
+// Large corrections (LargeClosureConfig): a closure that moves the estimate by more than the
+// robust kernel of the back end would follow (metres of drift) must be right, because it is
+// added without the kernel and bends the whole loop. It must lie within the drift the model
+// allows between the keyframe and the chain, and is held back until a second keyframe, at least
+// confirm_min_distance away along the path, matches the old map at the pose the first closure's
+// correction predicts, both under stricter thresholds; then both edges go in together.
+// Global search: when the local search found nothing and chains lie around the estimate whose
+// drift exceeds what the large window covers, those chains are searched by branch-and-bound over
+// a window as wide as that drift (and as many headings), coarse to fine (a coarse table first,
+// then the large window's resolution around its best pose, then the refinement); its closures are
+// confirmed like large ones. Global searches run at most once every global_interval keyframes.
+// finish() searches from every keyframe the interval skipped since the last search (a loop that
+// closes at the end of a log).
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -28,11 +44,93 @@
 
 namespace slam2d {
 
+/// How far two keyframes' estimates may have drifted apart: standard deviations that grow with
+/// the distance travelled and the angle turned along the graph's shortest path between them
+/// (sequential edges, and loop edges, which join revisits: a closure shortens the path to every
+/// place it links), added up, not in quadrature (systematic drift, a scale or heading bias, adds
+/// up linearly). Separate from the sequential edges' sigmas, which describe one keyframe-to-
+/// keyframe match for the optimisation. The defaults, 3 sigmas = 5 % of the distance and
+/// 0.0009 rad/m + 0.9 % of the turn in heading, hold the tracker's drift over 99.7-100 % of the
+/// keyframe pairs of runs without closure on Intel (with and without odometry) and ACES with
+/// odometry (ACES without: 94.8 %, its tracker jumps, which is no drift), checked on FR079
+/// (99.9-100 %); see docs/methods/graph_slam.md.
+struct DriftModel {
+  double translation_per_metre = 0.0167;  // m per m travelled, >= 0
+  double rotation_per_metre = 0.0003;     // rad per m travelled, >= 0
+  double rotation_per_radian = 0.003;     // rad per rad turned, >= 0
+};
+
+/// The drift sigmas between two keyframes joined by a path.
+struct Drift {
+  double translation = 0.0;  // m
+  double rotation = 0.0;     // rad
+};
+
+/// The shortest path through a graph from a source node: the distance travelled (the edges'
+/// translations) and the angle turned along it (the edges' rotations).
+struct GraphPath {
+  double distance = 0.0;  // m; infinity when unreachable
+  double turned = 0.0;    // rad
+};
+
+/// The drift sigmas of a path.
+Drift drift_along(const GraphPath& path, const DriftModel& model);
+
+struct LargeClosureConfig {
+  // A closure moving the estimate farther than either bound is a large correction: under the
+  // back end's Cauchy kernel (scale 3 in sigmas of >= 1 cm and 0.004 rad) it would count for next
+  // to nothing, so it is confirmed and added without the kernel instead. It must also lie within
+  // the drift model's uncertainty_sigmas between the keyframe and the chain.
+  double min_translation = 1.0;  // m, > 0
+  double min_rotation = 0.1;     // rad, > 0
+  // Stricter thresholds than a local closure's, for both the first and the confirming match.
+  double min_score = 0.6;            // 1, in [0, 1]: correlative response
+  double min_inlier_fraction = 0.8;  // 1, in [0, 1]: after refinement
+  // The confirmation: a keyframe this far on along the path (or back, at the end of a log),
+  // matched at the first closure's correction over confirm_match's small window.
+  double confirm_min_distance = 0.2;  // m, >= 0
+  double confirm_max_distance = 8.0;  // m, >= confirm_min_distance: unconfirmed by then, dropped
+  // The second match must land this near the predicted pose (the motion between the two keyframes
+  // is the tracker's, good to centimetres over a few metres).
+  double confirm_tolerance = 0.25;          // m, > 0
+  double confirm_rotation_tolerance = 0.05;  // rad, > 0
+  MapMatchConfig confirm_match{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.5, .window_y = 0.5,
+                                               .window_theta = 0.1, .angular_step = 0.004, .min_score = 0.5},
+                               .refinement = {.max_correspondence_distance = 0.3},
+                               .max_refinement_shift = 0.3,
+                               .min_sigma_translation = 0.01,
+                               .min_sigma_rotation = 0.004,
+                               .min_score_at_window_edge = 1.0};
+  // Global search.
+  bool global_search = true;
+  int global_interval = 16;        // keyframes, >= 1: at most one global search per this many
+  double max_global_radius = 50.0;  // m, > 0: candidates within search_radius + the drift radius, up to this
+  double max_global_window = 25.0;  // m, > 0: translation half-width, the chain's drift radius up to this
+  int max_global_chains = 1;        // 1, >= 1: chains searched per global search, nearest first
+  // The coarse search: a 10 cm table under a 10 cm kernel, 0.57 deg steps (a point 10 m out moves
+  // one cell per step), no refinement; its window is set per search.
+  MapMatchConfig global_coarse{.correlative = {.resolution = 0.1, .sigma = 0.1, .angular_step = 0.01, .min_score = 0.5},
+                               .refine = false,
+                               .map_voxel = 0.05,
+                               .min_score_at_window_edge = 1.0};
+  // The fine search around the coarse pose, with the refinement (the large window's table).
+  MapMatchConfig global_fine{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.3, .window_y = 0.3,
+                                             .window_theta = 0.03, .angular_step = 0.004, .min_score = 0.5},
+                             .refinement = {.max_correspondence_distance = 0.3},
+                             .max_refinement_shift = 0.3,
+                             .min_sigma_translation = 0.01,
+                             .min_sigma_rotation = 0.004,
+                             .min_score_at_window_edge = 1.0};
+};
+
 struct LoopClosureConfig {
   bool enabled = true;
-  double search_radius = 4.0;        // m, > 0: candidates within this of the estimate ...
-  double uncertainty_sigmas = 3.0;   // 1, >= 0: ... plus this many standard deviations of the accumulated uncertainty
-  double max_search_radius = 12.0;   // m, >= search_radius
+  // The local search takes candidates within search_radius of the estimate (its large window
+  // covers a drift up to its half-width); the global search those within search_radius plus
+  // uncertainty_sigmas standard deviations of the drift between them (DriftModel), up to
+  // large.max_global_radius.
+  double search_radius = 4.0;        // m, > 0
+  double uncertainty_sigmas = 3.0;   // 1, >= 0
   double min_path_distance = 10.0;   // m, >= 0: the recent chain, left out
   int min_chain_size = 10;           // 1, >= 1 (Karto's loop match minimum chain size)
   int max_chains = 1;                // 1, >= 1: chains searched over the large window per keyframe, nearest first
@@ -53,6 +151,7 @@ struct LoopClosureConfig {
   bool reject_degenerate = true;           // the scene's Fisher information must constrain every direction
   double map_radius = 15.0;          // m, > 0: chain points this far beyond the search window from the estimate are left out
   bool delayed = false;              // delayed loop closure
+  DriftModel drift{};
   // The large window: +-4 m, +-0.35 rad. A +-90 deg window costs about 4x more (branch-and-bound
   // keeps it affordable) but on FR079 it lets symmetric rooms in: 0.087 m mean relation error
   // against 0.065 m.
@@ -64,19 +163,55 @@ struct LoopClosureConfig {
                        .min_sigma_rotation = 0.004,
                        .min_score_at_window_edge = 1.0};
   MapMatchConfig near_match{.min_score_at_window_edge = 1.0};  // for near chains: the sequential constraint's window
+  LargeClosureConfig large{};
 };
 
-/// A verified closure: the edge (robust) and the response that accepted it.
+/// How a closure was found.
+enum class LoopSearch {
+  kLocal,         // the large window around the estimate
+  kNear,          // a near chain's link (small window)
+  kGlobal,        // the global search
+  kConfirmation,  // the second keyframe of a large correction
+};
+
+/// A verified closure: the edge (robust unless it is a confirmed large correction) and the
+/// response that accepted it.
 struct LoopClosure {
   PoseGraphEdge edge;
-  double score = 0.0;  // correlative response, the fraction of points on the chain's map
-  std::size_t chain_begin = 0;  // keyframe indices [begin, end) of the chain
+  double score = 0.0;            // correlative response, the fraction of points on the chain's map
+  double inlier_fraction = 0.0;  // after refinement
+  std::size_t keyframe = 0;      // the keyframe the closure was searched from
+  std::size_t anchor = 0;        // the chain's keyframe the edge starts at
+  std::size_t chain_begin = 0;   // keyframe indices [begin, end) of the chain
   std::size_t chain_end = 0;
-  bool near = false;  // a near chain's link (small window), not a loop closed over the large window
+  LoopSearch search = LoopSearch::kLocal;
+  SE2 T_map_matched;             // the keyframe's pose the match found (the estimate's frame when found)
+  double correction_translation = 0.0;  // m, how far the match moves the keyframe from its estimate
+  double correction_rotation = 0.0;     // rad
+
+  bool near() const { return search == LoopSearch::kNear; }
+};
+
+/// What the searches did, for the run's summary.
+struct LoopCloserStats {
+  std::size_t attempts = 0;              // chains searched over the large window
+  std::size_t global_searches = 0;
+  std::size_t global_chains = 0;         // chains searched by global searches
+  std::size_t global_closures = 0;       // confirmed closures first found by a global search
+  std::size_t large_closures = 0;        // confirmed large corrections (global or local)
+  std::size_t unconfirmed = 0;           // large corrections dropped for want of a confirmation
+  double global_seconds = 0.0;           // wall time of the global searches
 };
 
 /// Throws Error for out-of-range values.
+void validate(const DriftModel& model);
+void validate(const LargeClosureConfig& config);
 void validate(const LoopClosureConfig& config);
+
+/// The shortest paths (by distance travelled, Dijkstra) from `source` to every node, up to
+/// `max_distance` (farther nodes: infinity).
+std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source,
+                                   double max_distance = std::numeric_limits<double>::infinity());
 
 /// The nodes reachable from `source` along edges whose translations sum to at most `max_distance`
 /// (Dijkstra), as a flag per node.
@@ -91,25 +226,48 @@ class LoopCloser {
   explicit LoopCloser(const LoopClosureConfig& config = {});
 
   /// Closures of keyframe `current` (its node's pose in the graph is the estimate) with earlier
-  /// keyframes, given the extra search radius the accumulated uncertainty allows. With delayed
-  /// closure the result may be a closure of an earlier keyframe held back until now.
+  /// keyframes. With delayed closure the result may be a closure of an earlier keyframe held back
+  /// until now; a confirmed large correction comes as two closures. `final`: searched from
+  /// finish(), the large window (and a due global search) whatever the intervals.
   std::vector<LoopClosure> close(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current,
-                                 double uncertainty_radius, std::size_t* attempts = nullptr);
-  /// The closure still held back (delayed mode), released.
-  std::optional<LoopClosure> release();
+                                 bool final = false);
+  /// The keyframes after the last one searched over the large window (finish() searches them).
+  std::size_t first_unsearched() const { return last_searched_ ? *last_searched_ + 1 : 0; }
+  /// At the end of a log: the closure still held back (delayed mode), released; a large
+  /// correction still unconfirmed is dropped (the keyframes before it were tried when it was found).
+  std::vector<LoopClosure> release();
 
   const LoopClosureConfig& config() const { return config_; }
+  const LoopCloserStats& stats() const { return stats_; }
 
  private:
+  using Chain = std::pair<std::size_t, std::size_t>;
+  struct Uncertainty;  // per keyframe, from the current one
+
+  Uncertainty uncertainty(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current) const;
   std::vector<LoopClosure> verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current,
-                                  double uncertainty_radius, std::size_t* attempts) const;
+                                  const Uncertainty& uncertainty, bool search_large_window);
+  std::optional<LoopClosure> search_globally(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                             std::size_t current, const Uncertainty& uncertainty);
+  std::optional<LoopClosure> confirm(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                     std::size_t current) const;
+  std::optional<LoopClosure> confirm_before(const std::vector<Keyframe>& keyframes, const PoseGraph& graph) const;
+  bool within_drift(const LoopClosure& closure, const Uncertainty& uncertainty) const;
   std::optional<LoopClosure> match_chain(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                         std::size_t current, std::pair<std::size_t, std::size_t> chain,
-                                         const MapMatchConfig& match_config) const;
+                                         std::size_t current, Chain chain, const SE2& guess,
+                                         const MapMatchConfig& match_config,
+                                         const MapMatchConfig* coarse = nullptr) const;
+  bool is_large(const LoopClosure& closure) const;
+  bool passes_strict(const LoopClosure& closure) const;
   std::vector<LoopClosure> delay(std::vector<LoopClosure> verified);
+  std::vector<LoopClosure> confirmed(LoopClosure second);
 
   LoopClosureConfig config_;
-  std::optional<LoopClosure> pending_;
+  LoopCloserStats stats_;
+  std::optional<LoopClosure> pending_;        // delayed mode: the best closure so far
+  std::optional<LoopClosure> pending_large_;  // a large correction waiting for its confirmation
+  std::optional<std::size_t> last_searched_;  // the last keyframe searched over the large window
+  std::optional<std::size_t> last_global_;    // the last keyframe a global search ran from
 };
 
 }  // namespace slam2d
