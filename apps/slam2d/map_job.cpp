@@ -120,6 +120,15 @@ MappingRun map_with_graph(const MapJobOptions& options) {
   run.method_summary.add("odometry", !options.no_odometry).add("keyframes", stats.keyframes);
   run.method_summary.add("loop_closures", stats.loop_closures).add("near_links", stats.near_links);
   run.method_summary.add("loop_attempts", stats.loop_attempts);
+  run.method_summary.add("global_searches", stats.global_searches).add("global_closures", stats.global_closures);
+  run.method_summary.add("large_closures", stats.large_closures).add("unconfirmed_closures", stats.unconfirmed_closures);
+  run.method_summary.add("final_search_closures", stats.final_search_closures);
+  run.method_summary.add("global_search_s", stats.global_search_seconds);
+  if (stats.unconfirmed_closures > 0) {  // graph SLAM could not decide: say so instead of bending the map
+    run.warnings.push_back(fmt::format("graph: {} large loop corrections found but not confirmed by a second keyframe "
+                                       "were left out; a loop may be left open",
+                                       stats.unconfirmed_closures));
+  }
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
   if (!options.no_odometry) report_odometry(run, slam.odometry_stats());
