@@ -23,6 +23,8 @@
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/sim/world.hpp"
 
+#include "localization/localization_run.hpp"
+
 namespace slam2d {
 namespace {
 
@@ -113,25 +115,9 @@ const LocalizationMap& building_map() {
   return map;
 }
 
-struct RunResult {
-  LocalizationRunSummary summary;
-  std::vector<double> errors;  // m, per scan
-  std::vector<bool> localized;
-};
+using RunResult = test::LocalizationRun;
 
-RunResult run(Localizer& localizer) {
-  const SimulatedRun& sim = building_run();
-  LocalizationSession session(localizer);
-  RunResult result;
-  const auto lasers = laser_messages(sim);
-  for (std::size_t i = 0; i < lasers.size(); ++i) {
-    const LocalizationEstimate& estimate = session.add(lasers[i]->odom_pose, lasers[i]->scan);
-    result.errors.push_back((estimate.pose.translation() - sim.truth[i].pose.translation()).norm());
-  }
-  result.summary = session.summary();
-  result.localized = session.localized();
-  return result;
-}
+RunResult run(Localizer& localizer) { return test::run_localization(localizer, building_run()); }
 
 // Converged within `max_converge_s` s of data, every step from 5 s later near the truth, and no
 // step reported localized more than 1 m from the truth (a look-alike floor is 30 m away).

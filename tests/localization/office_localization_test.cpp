@@ -17,6 +17,7 @@
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/sim/world.hpp"
 #include "support/simulated_office.hpp"
+#include "localization/localization_run.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -29,24 +30,10 @@ const LocalizationMap& office_map() {
   return map;
 }
 
-struct RunResult {
-  LocalizationRunSummary summary;
-  std::vector<double> errors;  // m, per scan
-  std::vector<bool> localized;
-};
+using RunResult = test::LocalizationRun;
 
 RunResult run(Localizer& localizer, std::optional<Kidnap> kidnap = std::nullopt) {
-  const SimulatedRun& sim = office_run();
-  LocalizationSession session(localizer, kidnap);
-  RunResult result;
-  const auto lasers = laser_messages(sim);
-  for (std::size_t i = 0; i < lasers.size(); ++i) {
-    const LocalizationEstimate& estimate = session.add(lasers[i]->odom_pose, lasers[i]->scan);
-    result.errors.push_back((estimate.pose.translation() - sim.truth[i].pose.translation()).norm());
-  }
-  result.summary = session.summary();
-  result.localized = session.localized();
-  return result;
+  return test::run_localization(localizer, office_run(), kidnap);
 }
 
 // Mean and max error over the scans from `from` s on.

@@ -43,6 +43,14 @@ struct LikelihoodFieldConfig {
   double z_max = 30.0;          // m, > 0: the sensor's maximum range; the uniform density is 1 / z_max
 };
 
+/// `config` with another sigma_hit, its distance cap widened to at least 3 sigma_hit (a wider,
+/// smoother field: the Markov grid's cells, the global pose search's coarse poses).
+inline LikelihoodFieldConfig with_sigma_hit(LikelihoodFieldConfig config, double sigma_hit) {
+  config.sigma_hit = sigma_hit;
+  config.max_distance = config.max_distance > 3.0 * sigma_hit ? config.max_distance : 3.0 * sigma_hit;
+  return config;
+}
+
 class LikelihoodField {
  public:
   /// The field of a finished map (any origin pose): cells >= occupied_threshold are obstacles,

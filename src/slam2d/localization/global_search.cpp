@@ -12,12 +12,6 @@ namespace slam2d {
 
 namespace {
 
-LikelihoodFieldConfig search_field(LikelihoodFieldConfig field, double sigma_hit) {
-  field.sigma_hit = sigma_hit;
-  field.max_distance = std::max(field.max_distance, 3.0 * sigma_hit);
-  return field;
-}
-
 // Centres of the free map cells on a stride of `stride` cells (the middle cell of each block).
 std::vector<Eigen::Vector2d> free_positions(const OccupancyMap& map, int stride) {
   std::vector<Eigen::Vector2d> positions;
@@ -43,7 +37,7 @@ void validate(const GlobalSearchConfig& config) {
 
 GlobalPoseSearch::GlobalPoseSearch(const LocalizationMap& map, const GlobalSearchConfig& config)
     : config_((validate(config), config)),
-      field_map_(map.map(), search_field(map.field().config(), std::max(config.sigma_hit, config.step_xy))) {
+      field_map_(map.map(), with_sigma_hit(map.field().config(), std::max(config.sigma_hit, config.step_xy))) {
   const OccupancyMap& m = map.map();
   headings_ = static_cast<int>(std::ceil(2.0 * std::numbers::pi / config_.step_theta - 1e-9));
   heading_step_ = 2.0 * std::numbers::pi / headings_;

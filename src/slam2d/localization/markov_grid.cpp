@@ -11,16 +11,6 @@
 
 namespace slam2d {
 
-namespace {
-
-LikelihoodFieldConfig with_sigma(LikelihoodFieldConfig config, double sigma_hit) {
-  config.sigma_hit = sigma_hit;
-  config.max_distance = std::max(config.max_distance, 3.0 * sigma_hit);
-  return config;
-}
-
-}  // namespace
-
 void validate(const MarkovGridConfig& config) {
   check(config.resolution > 0.0 && config.angles >= 4 && config.max_beams > 0 && config.usable_range > 0.0 &&
             config.sigma_hit > 0.0,
@@ -36,7 +26,7 @@ void validate(const MarkovGridConfig& config) {
 MarkovGridLocalization::MarkovGridLocalization(const LocalizationMap& map, const MarkovGridConfig& config)
     : map_(map),
       config_(config),
-      sensor_map_((validate(config), map.map()), with_sigma(map.field().config(), config.sigma_hit)),
+      sensor_map_((validate(config), map.map()), with_sigma_hit(map.field().config(), config.sigma_hit)),
       status_(config.status) {
   const OccupancyMap& m = map_.map();
   T_map_grid_ = m.origin;
