@@ -49,38 +49,44 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     result.dt = stamp - last_stamp_;
     result.gap = result.dt > config_.gap;
     stats_.gaps += result.gap ? 1 : 0;
-    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stamp - moved_at_);
+    const std::size_t stalls = stats_.stalls;
+    // How long the pose had stood still: up to this scan if it is still frozen, else up to the last.
+    const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
+    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood);
+    result.stall_start = stats_.stalls > stalls;
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
     // integrated): the increment after it may still carry that motion.
     lag_allowance_ = result.gap ? result.dt : 0.0;
     ++stats_.checks;
   }
-  if (result.first || !is_frozen(result.increment)) moved_at_ = stamp;
+  result.moved = result.first || !is_frozen(result.increment);
+  if (result.moved) moved_at_ = stamp;
   last_pose_ = T_odom_robot;
   last_stamp_ = stamp;
   return result;
 }
 
-// The state machine of the header: stall (frozen after motion) until the pose moves, then one
-// catch-up; otherwise a jump when the increment is out of bounds.
 bool OdometryGuard::is_frozen(const SE2& increment) const {
   return increment.translation().norm() <= config_.frozen_translation &&
          std::abs(increment.theta()) <= config_.frozen_rotation;
 }
 
-OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double frozen_for) {
+// The state machine of the header: stall (frozen after motion) until the pose moves; a catch-up
+// when it moves after standing still for stall_duration (after a stall, or after a rest during
+// which the robot may have moved unseen); otherwise a jump when the increment is out of bounds.
+OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood) {
   const double translation = increment.translation().norm();
   const double rotation = std::abs(increment.theta());
   if (is_frozen(increment)) {
     // At rest "no motion" is true; and a pose repeated over less than stall_duration may be an
     // odometry slower than the scanner.
-    if (!stalled_ && (!was_moving_ || frozen_for < config_.stall_duration)) return OdometryFault::kNone;
+    if (!stalled_ && (!was_moving_ || stood < config_.stall_duration)) return OdometryFault::kNone;
     if (!stalled_) ++stats_.stalls;
     stalled_ = true;
     ++stats_.stalled_scans;
     return OdometryFault::kStall;
   }
-  if (stalled_) {
+  if (stalled_ || stood >= config_.stall_duration) {
     stalled_ = false;
     was_moving_ = true;  // unknown: the next frozen increment is taken as a stall again
     ++stats_.catch_ups;

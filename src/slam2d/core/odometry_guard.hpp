@@ -15,7 +15,11 @@
 //    again. Frozen increments after small ones (a robot at rest) are trusted: they say "no
 //    motion", which is true; so are those within stall_duration of the last change (an odometry
 //    slower than the scanner repeats its pose; Intel has scans 1 ms apart).
-//  - catch-up: the first increment after a stall carries the motion of the whole stall.
+//  - catch-up: the first increment after the pose stood still for stall_duration or more: after a
+//    stall it carries the motion of the whole stall; after a rest, any motion the robot made
+//    while the odometry froze (a freeze that began at rest cannot be told from the rest itself).
+//    A method applies it from its estimate at the scan where the pose last moved
+//    (OdometryCheck::moved), so that nothing is counted twice either way.
 //  - jump: an increment beyond what the robot could have moved in the time step: more than
 //    max_speed * dt + jump_translation_slack or max_turn_rate * dt + jump_rotation_slack, with dt
 //    at least min_time_step (stamps of real logs jitter and step back, so short or negative steps
@@ -71,6 +75,8 @@ struct OdometryCheck {
   OdometryFault fault = OdometryFault::kNone;
   bool gap = false;                     // dt > config.gap
   bool first = false;                   // the first scan: nothing to check
+  bool stall_start = false;             // the first increment of a stall
+  bool moved = false;                   // the pose changed (or the first scan): a later catch-up starts here
   bool trusted() const { return fault == OdometryFault::kNone; }
 };
 
@@ -95,7 +101,7 @@ class OdometryGuard {
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
-  OdometryFault classify(const SE2& increment, double dt, double frozen_for);
+  OdometryFault classify(const SE2& increment, double dt, double stood);
   bool is_frozen(const SE2& increment) const;
   bool exceeds_bounds(const SE2& increment, double dt) const;
 

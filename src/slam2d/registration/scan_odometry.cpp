@@ -90,20 +90,20 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   // The guarded odometry pose (the odometry with every untrusted increment replaced, below, by
   // the motion the scan is estimated to have made), or none when this increment is not trusted.
   std::optional<SE2> guarded;
-  bool trusted = false;
+  bool odometry_moved = false;
   if (odom_pose) {
     const OdometryCheck odometry = odometry_guard_.check(scan.stamp, *odom_pose);
-    trusted = odometry.trusted();
-    if (trusted) guarded = odometry_correction_ ? *odometry_correction_ * *odom_pose : *odom_pose;
-    if (odometry.fault == OdometryFault::kCatchUp) {  // the motion since the last trusted scan
-      guarded = guarded_trusted_ * odometry.increment;
+    odometry_moved = odometry.moved;
+    if (odometry.trusted()) guarded = odometry_correction_ ? *odometry_correction_ * *odom_pose : *odom_pose;
+    if (odometry.fault == OdometryFault::kCatchUp) {  // the motion since the odometry last moved
+      guarded = guarded_moved_ * odometry.increment;
       odometry_correction_ = *guarded * odom_pose->inverse();
     }
   }
   if (!keyframe_) {  // the first scan fixes the world frame
     const SE2 pose = odom_pose.value_or(SE2());
     keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
-    if (odom_pose) guarded_previous_ = guarded_trusted_ = *odom_pose;
+    if (odom_pose) guarded_previous_ = guarded_moved_ = *odom_pose;
     ++stats_.keyframes;
     T_world_previous_ = pose;
     previous_stamp_ = scan.stamp;
@@ -132,7 +132,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
     odometry_correction_ = *guarded * odom_pose->inverse();
   }
   if (guarded) guarded_previous_ = *guarded;
-  if (trusted) guarded_trusted_ = *guarded;
+  if (odometry_moved) guarded_moved_ = *guarded;
   update_velocity(scan.stamp, pose);
   trajectory_.push_back(scan.stamp, pose);
   const bool moved = T_keyframe_robot.translation().norm() >= config_.keyframe_distance ||

@@ -53,8 +53,8 @@ struct ScanOdometryConfig {
   double max_correction_angle = 0.5;       // rad, > 0: gate on |theta| of guess^-1 * result
   // Each odometry increment is checked first (core/odometry_guard.hpp); a scan whose increment is
   // not trusted (a stall, a jump) is predicted by constant velocity, and its estimated motion
-  // replaces the increment in the odometry the next predictions start from; a stall's catch-up
-  // is applied from the last trusted scan.
+  // replaces the increment in the odometry the next predictions start from; a catch-up is
+  // applied from the scan where the odometry last moved.
   OdometryGuardConfig odometry_guard{};
 };
 
@@ -106,7 +106,7 @@ class ScanOdometry {
   // (none until the first untrusted increment, so clean odometry is used exactly as logged).
   std::optional<SE2> odometry_correction_;
   SE2 guarded_previous_;  // the guarded odometry pose of the last scan
-  SE2 guarded_trusted_;   // ... of the last scan whose increment was trusted
+  SE2 guarded_moved_;     // ... of the last scan whose odometry pose moved
   std::optional<Keyframe> keyframe_;
   SE2 T_world_previous_;          // the last scan's pose
   double previous_stamp_ = 0.0;   // s

@@ -66,8 +66,11 @@ HectorSlam::HectorSlam(const HectorSlamConfig& config)
   validate(free_matcher_);
 }
 
-// The odometry prior is in force and the guard trusts this scan's increment.
-bool HectorSlam::odometry_trusted() const { return config_.prior == MotionPrior::kOdometry && odometry_.trusted(); }
+// The odometry prior is in force and this scan is predicted by the odometry: its increment is
+// trusted, or it is a catch-up applied from the scan where the odometry last moved.
+bool HectorSlam::odometry_trusted() const {
+  return config_.prior == MotionPrior::kOdometry && (odometry_.trusted() || odometry_.fault == OdometryFault::kCatchUp);
+}
 
 HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& inputs) {
   check(config_.prior != MotionPrior::kOdometry || inputs.T_odom_robot.has_value(),
@@ -94,7 +97,7 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   previous_dt_ = last_pose_ ? scan.stamp - last_stamp_ : 0.0;
   previous_pose_ = last_pose_;
   last_pose_ = step.T_map_robot;
-  if (odometry_.trusted()) last_trusted_pose_ = step.T_map_robot;
+  if (odometry_.moved) last_moved_pose_ = step.T_map_robot;
   last_stamp_ = scan.stamp;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
   return step;
@@ -119,7 +122,7 @@ HectorMatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& poi
                                          bool with_odometry, const std::optional<PosePrior>& prior) const {
   const HectorMatcherConfig& matcher = with_odometry ? config_.matcher : free_matcher_;
   HectorMatchResult result = match_scan_to_pyramid(map_, points, start, matcher, prior);
-  if (result.mean_squared_residual > (with_odometry ? config_.recovery_residual : free_recovery_residual_)) {
+  if (result.mean_squared_residual > recovery_residual(with_odometry)) {
     HectorMatcherConfig wide = matcher;
     wide.rotation_search_range = std::numbers::pi;
     HectorMatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
@@ -128,13 +131,23 @@ HectorMatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& poi
   return result;
 }
 
+// The fit worse than which a match is retried over every heading: the robot may have turned far
+// without odometry or across a jump, but not within a stall, which spans the scan period.
+double HectorSlam::recovery_residual(bool with_odometry) const {
+  const bool stalled = odometry_.fault == OdometryFault::kStall || odometry_.fault == OdometryFault::kCatchUp;
+  return with_odometry || (config_.prior == MotionPrior::kOdometry && stalled) ? config_.recovery_residual
+                                                                                : free_recovery_residual_;
+}
+
 // Where the match of a scan whose odometry increment the guard did not trust starts, and the
 // second start that competes with it:
-//  - stall: the last estimated motion repeated (a stall is declared only after the pose stood
-//    still for a while, so that motion is what the scans showed meanwhile: about none for a robot
-//    come to rest, a metre in a log with a scan every two seconds), against the last pose;
-//  - catch-up: the estimate at the last trusted scan moved by the catch-up, which carries the
-//    motion since then, so nothing is counted twice; against the last pose;
+//  - stall, its first scan: the last estimated motion repeated (a stall is declared only after
+//    the pose stood still for a while, so that motion is what the scans showed meanwhile: about
+//    none for a robot come to rest, a metre in a log with a scan every two seconds), against the
+//    last pose; its later scans: the last pose (repeating the motion scan after scan would carry
+//    on a turn the scans cannot refute: Intel, 1 rad over a burst of scans 1 ms apart);
+//  - catch-up: the estimate at the scan where the odometry last moved, moved by the catch-up,
+//    which carries the motion since then, so nothing is counted twice; against the last pose;
 //  - jump: the last pose, against the odometry (a fault, or a motion the bounds did not foresee).
 // The second start wins with a better fit; for stalls and catch-ups a fifth better, since the
 // first rests on the motion seen, not on a guess.
@@ -142,10 +155,10 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
   if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.trusted()) return std::nullopt;
   switch (odometry_.fault) {
     case OdometryFault::kStall: {
-      const SE2 last_motion = previous_pose_ ? previous_pose_->between(*last_pose_) : SE2();
-      return UntrustedStarts{*last_pose_ * last_motion, *last_pose_, 0.8};
+      if (!odometry_.stall_start || !previous_pose_) return UntrustedStarts{*last_pose_, *last_pose_, 1.0};
+      return UntrustedStarts{*last_pose_ * previous_pose_->between(*last_pose_), *last_pose_, 0.8};
     }
-    case OdometryFault::kCatchUp: return UntrustedStarts{last_trusted_pose_ * odometry_.increment, *last_pose_, 0.8};
+    case OdometryFault::kCatchUp: return UntrustedStarts{last_moved_pose_ * odometry_.increment, *last_pose_, 0.8};
     case OdometryFault::kJump: return UntrustedStarts{*last_pose_, *last_pose_ * odometry_.increment, 1.0};
     case OdometryFault::kNone: break;
   }
@@ -156,7 +169,7 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
 // none where the odometry prior is in force but this scan's increment is not trusted.
 std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan) const {
   if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
-  if (config_.prior == MotionPrior::kOdometry && !odometry_.trusted()) return std::nullopt;
+  if (config_.prior == MotionPrior::kOdometry && !odometry_trusted()) return std::nullopt;
   const MotionPrior model = config_.prior == MotionPrior::kLastPose ? MotionPrior::kConstantVelocity : config_.prior;
   const Eigen::Vector3d information(config_.prior_information_translation, config_.prior_information_translation,
                                     config_.prior_information_rotation);

@@ -116,6 +116,7 @@ class HectorSlam {
   HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
                                const std::optional<PosePrior>& prior) const;
   std::optional<UntrustedStarts> untrusted_starts() const;
+  double recovery_residual(bool with_odometry) const;
   std::optional<PosePrior> pose_prior(const LaserScan& scan) const;
   bool odometry_trusted() const;
   SE2 predict(const LaserScan& scan) const;
@@ -132,7 +133,7 @@ class HectorSlam {
   MapPyramid map_;
   Trajectory trajectory_;
   std::optional<SE2> last_pose_;       // estimate at the previous scan
-  SE2 last_trusted_pose_;              // estimate at the last scan whose odometry increment was trusted
+  SE2 last_moved_pose_;                // estimate at the last scan whose odometry pose moved
   std::optional<SE2> previous_pose_;   // estimate at the scan before that
   double last_stamp_ = 0.0;
   double previous_dt_ = 0.0;           // s, between the two previous scans

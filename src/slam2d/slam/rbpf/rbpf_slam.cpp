@@ -185,13 +185,13 @@ bool RbpfSlam::resample_if_needed() {
 }
 
 // The scan's pose in the odometry frame the filter runs on: the last one moved by the wheel
-// odometry's increment when the guard trusts it; after a stall, the one at the last trusted scan
-// moved by the catch-up (which carries the motion since then); else not moved. Then matched
+// odometry's increment when the guard trusts it; a catch-up from the one at the scan where the
+// wheel odometry last moved (the catch-up carries the motion since then); else not moved. Then matched
 // against the best particle's map (without the motion prior when the increment was not trusted).
 SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry) {
   SE2 delta;
   if (odometry.trusted()) delta = odometry.increment;
-  if (odometry.fault == OdometryFault::kCatchUp) delta = last_corrected_odometry_.between(last_trusted_corrected_ * odometry.increment);
+  if (odometry.fault == OdometryFault::kCatchUp) delta = last_corrected_odometry_.between(last_moved_corrected_ * odometry.increment);
   SE2 corrected = last_corrected_odometry_ * delta;
   if (config_.scan_matched_odometry) {
     // The previous scan's pose in the best particle's map, the prediction, the match.
@@ -206,14 +206,14 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
     if (match.matched) corrected = last_corrected_odometry_ * previous.between(match.x_star);
   }
   last_corrected_odometry_ = corrected;
-  if (odometry.trusted()) last_trusted_corrected_ = corrected;
+  if (odometry.moved) last_moved_corrected_ = corrected;
   return corrected;
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
   RbpfStep step;
   const OdometryCheck odometry = odometry_guard_.check(scan.stamp, wheel_odometry);
-  if (scans_.empty()) last_corrected_odometry_ = last_trusted_corrected_ = wheel_odometry;
+  if (scans_.empty()) last_corrected_odometry_ = last_moved_corrected_ = wheel_odometry;
   const SE2 T_odom_robot = scans_.empty() ? wheel_odometry : corrected_odometry(scan, odometry);
   if (scans_.empty()) {
     initialise(scan, T_odom_robot);

@@ -86,8 +86,8 @@ struct RbpfConfig {
   double scan_odometry_rotation_step = 0.05;   // rad, > 0
   double scan_odometry_rotation_margin = 0.2;  // 1, in [0, 1)
   // Each wheel-odometry increment is checked first (core/odometry_guard.hpp); one that is not
-  // trusted (a stall, a jump) is replaced by no motion, a stall's catch-up is applied from the
-  // last trusted scan, and the per-scan matching finds the motion without the prior.
+  // trusted (a stall, a jump) is replaced by no motion, a catch-up is applied from the scan where
+  // the odometry last moved, and the per-scan matching finds the motion without the prior.
   OdometryGuardConfig odometry_guard{};
 };
 
@@ -177,7 +177,7 @@ class RbpfSlam {
   std::shared_ptr<RbpfWorkers> workers_;  // null when serial (threads resolve to 1)
   OdometryGuard odometry_guard_;
   SE2 last_corrected_odometry_;  // scan-matched odometry at the previous scan
-  SE2 last_trusted_corrected_;   // ... at the last scan whose wheel-odometry increment was trusted
+  SE2 last_moved_corrected_;     // ... at the last scan whose wheel-odometry pose moved
   std::vector<RbpfParticle> particles_;
   std::vector<ScanRecord> scans_;
   std::vector<SE2> update_odometry_;  // odometry pose at each update
