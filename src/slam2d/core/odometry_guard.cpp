@@ -86,9 +86,10 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     ++stats_.stalled_scans;
     return OdometryFault::kStall;
   }
+  const bool moving = translation > config_.moving_translation || rotation > config_.moving_rotation;
   if (stalled_ || stood >= config_.stall_duration) {
     stalled_ = false;
-    was_moving_ = true;  // unknown: the next frozen increment is taken as a stall again
+    was_moving_ = moving;
     ++stats_.catch_ups;
     return OdometryFault::kCatchUp;
   }
@@ -96,7 +97,7 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     ++stats_.jumps;
     return OdometryFault::kJump;
   }
-  was_moving_ = translation > config_.moving_translation || rotation > config_.moving_rotation;
+  was_moving_ = moving;
   return OdometryFault::kNone;
 }
 
