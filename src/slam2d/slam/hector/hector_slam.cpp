@@ -109,8 +109,8 @@ HectorMatchResult HectorSlam::match(const LaserScan& scan, const LaserScan& corr
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
   const bool with_odometry = odometry_trusted();
   HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(scan) : std::nullopt);
-  if (const std::optional<UntrustedStarts> starts = untrusted_starts()) {
-    HectorMatchResult second = match_from(points, starts->second, false, std::nullopt);
+  if (const std::optional<UntrustedStarts> starts = untrusted_starts(); starts && starts->second) {
+    HectorMatchResult second = match_from(points, *starts->second, false, std::nullopt);
     if (second.equations.cost < starts->second_factor * result.equations.cost) result = std::move(second);
   }
   return result;
@@ -144,8 +144,8 @@ double HectorSlam::recovery_residual(bool with_odometry) const {
 //  - stall, its first scan: the last estimated motion repeated (a stall is declared only after
 //    the pose stood still for a while, so that motion is what the scans showed meanwhile: about
 //    none for a robot come to rest, a metre in a log with a scan every two seconds), against the
-//    last pose; its later scans: the last pose (repeating the motion scan after scan would carry
-//    on a turn the scans cannot refute: Intel, 1 rad over a burst of scans 1 ms apart);
+//    last pose; its later scans: the last pose alone (repeating the motion scan after scan would
+//    carry on a turn the scans cannot refute: Intel, 1 rad over a burst of scans 1 ms apart);
 //  - catch-up: the estimate at the scan where the odometry last moved, moved by the catch-up,
 //    which carries the motion since then, so nothing is counted twice; against the last pose;
 //  - jump: the last pose, against the odometry (a fault, or a motion the bounds did not foresee).
@@ -155,7 +155,7 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
   if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.trusted()) return std::nullopt;
   switch (odometry_.fault) {
     case OdometryFault::kStall: {
-      if (!odometry_.stall_start || !previous_pose_) return UntrustedStarts{*last_pose_, *last_pose_, 1.0};
+      if (!odometry_.stall_start || !previous_pose_) return UntrustedStarts{*last_pose_, std::nullopt, 1.0};
       return UntrustedStarts{*last_pose_ * previous_pose_->between(*last_pose_), *last_pose_, 0.8};
     }
     case OdometryFault::kCatchUp: return UntrustedStarts{last_moved_pose_ * odometry_.increment, *last_pose_, 0.8};

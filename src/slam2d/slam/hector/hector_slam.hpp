@@ -110,7 +110,7 @@ class HectorSlam {
                           const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
-    SE2 second;                  // the competing start
+    std::optional<SE2> second;   // the competing start, if any
     double second_factor = 1.0;  // the second wins when its cost is below this times the first's
   };
   HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
