@@ -28,16 +28,6 @@ void validate(const OdometryGuardConfig& config) {
   check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
 }
 
-const char* to_string(OdometryFault fault) {
-  switch (fault) {
-    case OdometryFault::kNone: return "none";
-    case OdometryFault::kStall: return "stall";
-    case OdometryFault::kCatchUp: return "catch-up";
-    case OdometryFault::kJump: return "jump";
-  }
-  return "unknown";
-}
-
 OdometryGuard::OdometryGuard(const OdometryGuardConfig& config) : config_(config) { validate(config_); }
 
 OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {

@@ -66,8 +66,6 @@ void validate(const OdometryGuardConfig& config);
 
 enum class OdometryFault : std::uint8_t { kNone, kStall, kCatchUp, kJump };
 
-const char* to_string(OdometryFault fault);
-
 /// The verdict on one scan's odometry increment.
 struct OdometryCheck {
   SE2 increment;                        // T_previous_current from the raw odometry (identity at the first scan)
@@ -114,11 +112,5 @@ class OdometryGuard {
   double lag_allowance_ = 0.0;  // s, added to the next dt: the length of a gap just passed
   OdometryGuardStats stats_;
 };
-
-/// The pose a method predicts for the next scan from the last estimate: the odometry increment
-/// when it is trusted, else `fallback_motion` (the method's own motion estimate).
-inline SE2 predict_with_odometry(const SE2& T_map_last, const OdometryCheck& check, const SE2& fallback_motion) {
-  return T_map_last * (check.trusted() ? check.increment : fallback_motion);
-}
 
 }  // namespace slam2d
