@@ -117,6 +117,7 @@ JsonObject log_info(const InfoOptions& options) {
   json.add("backwards_timestamps", stats.backwards_laser_timestamps);
   json.add("backwards_timestamps_all_messages", stats.backwards_timestamps);
   json.add("skipped_lines", stats.skipped_lines);
+  json.add("odometry_steps_reversed", stats.odometry_steps_reversed);
   JsonObject types;
   for (const auto& [type, count] : laser_types) types.add(type, count);
   json.add("laser_types", types);

@@ -28,7 +28,6 @@
 #include "slam2d/localization/hybrid.hpp"
 #include "slam2d/localization/markov_grid.hpp"
 #include "slam2d/localization/mcl.hpp"
-#include "slam2d/localization/odometry_repair.hpp"
 #include "slam2d/localization/session.hpp"
 
 namespace slam2d::cli {
@@ -47,7 +46,6 @@ struct LocalizeOptions {
   std::string kidnap_by = "5,0,90";
   std::string sensor = "likelihood-field";
   CarmenReaderOptions geometry;  // FLASER geometry overrides (sensor_options.hpp)
-  bool reverse_from_tv = false;
   std::string out;
   bool json = false;
   bool quiet = false;
@@ -127,25 +125,20 @@ void run_localize(const LocalizeOptions& options) {
   LocalizationSession session(*localizer, kidnap);
   CarmenReader reader(options.log, options.geometry);
   Progress progress("localize", options.quiet);
-  ReverseOdometryRepair repair;
   while (auto message = reader.next()) {
-    if (const auto* odometry = std::get_if<OdometryMessage>(&*message)) {
-      repair.observe(odometry->reading);
-      continue;
-    }
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
     if (!laser->has_poses) {
       throw ParseError(reader.path(), laser->line, laser->type + " carries no odometry pose; localization needs odometry");
     }
-    session.add(options.reverse_from_tv ? repair.repair(laser->odom_pose) : laser->odom_pose, laser->scan);
+    session.add(laser->odom_pose, laser->scan);
     if (session.summary().scans % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans, localized: {}", session.summary().scans,
                                                      session.localized().back() ? "yes" : "no"));
     }
   }
   progress.finish();
-  print_geometry_warnings(reader);
+  print_reader_warnings(reader);
   const LocalizationRunSummary& run = session.summary();
   check(run.scans > 0, reader.path() + ": no front-laser scans in the log");
   const std::filesystem::path out(options.out);
@@ -156,9 +149,9 @@ void run_localize(const LocalizeOptions& options) {
   JsonObject summary;
   summary.add("method", options.method).add("log", options.log).add("map", options.map);
   if (options.method == "mcl") summary.add("particles", options.particles).add("sensor", options.sensor);
-  if (options.reverse_from_tv) summary.add("odometry_steps_reversed", repair.reversed_steps());
+  summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
   summary.merge(odometry_report(session.odometry_stats()));
-  std::vector<std::string> warnings = geometry_warnings(reader);
+  std::vector<std::string> warnings = reader_warnings(reader);
   if (const auto warning = odometry_warning(session.odometry_stats())) warnings.push_back(*warning);
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
@@ -198,8 +191,6 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();
   add_sensor_options(command, options->geometry);
-  command->add_flag("--reverse-from-tv", options->reverse_from_tv,
-                    "Mirror scan-to-scan odometry steps that move forward while ODOM tv < 0 (FR079 integrates reversing as forward)");
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");

@@ -33,6 +33,7 @@ struct MappingRun {
   JsonObject method_summary;       // what the method adds to summary.json
   std::size_t backwards_timestamps = 0;
   std::size_t skipped_lines = 0;
+  std::size_t odometry_steps_reversed = 0;  // mirrored by the reader's reverse-driving repair
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
   std::vector<std::string> warnings;  // what the reader and the method could not decide
 };
@@ -63,11 +64,12 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
     }
   }
   progress.finish();
-  print_geometry_warnings(reader);
-  run.warnings = geometry_warnings(reader);
+  print_reader_warnings(reader);
+  run.warnings = reader_warnings(reader);
   check(!run.trajectory.empty(), reader.path() + ": no laser scans in the log");
   run.backwards_timestamps = reader.stats().backwards_laser_timestamps;
   run.skipped_lines = reader.stats().skipped_lines;
+  run.odometry_steps_reversed = reader.stats().odometry_steps_reversed;
   run.data_duration = run.trajectory.back().stamp - run.trajectory.front().stamp;
   return run;
 }
@@ -210,6 +212,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.merge(run.method_summary);
   summary.add("resolution", options.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
+  summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());
   summary.add("warnings", run.warnings);
   write_outputs(options.out_dir, run, summary);

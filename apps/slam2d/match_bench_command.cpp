@@ -75,7 +75,7 @@ std::vector<ReferencedScan> read_scans(const MatchBenchOptions& options) {
     }
     scans.push_back({to_point_cloud(laser->scan, ScanFrame::kSensor).cloud, T_world_robot * laser->scan.T_robot_sensor});
   }
-  print_geometry_warnings(reader);
+  print_reader_warnings(reader);
   check(scans.size() >= 2, options.log + ": fewer than two front-laser scans with a reference pose");
   return scans;
 }

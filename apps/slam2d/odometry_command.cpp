@@ -71,7 +71,7 @@ void run_odometry(const OdometryOptions& options) {
     }
   }
   progress.finish();
-  print_geometry_warnings(reader);
+  print_reader_warnings(reader);
   const double cpu = clock.cpu_seconds();
   const Trajectory& trajectory = odometry.trajectory();
   check(!trajectory.empty(), reader.path() + ": no front-laser scans in the log");
@@ -89,7 +89,8 @@ void run_odometry(const OdometryOptions& options) {
   summary.add("mean_iterations", static_cast<double>(stats.total_iterations) / matches).add("failures", stats.failures);
   summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
   summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
-  std::vector<std::string> warnings = geometry_warnings(reader);
+  summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
+  std::vector<std::string> warnings = reader_warnings(reader);
   if (!options.no_odometry) {
     summary.merge(odometry_report(odometry.odometry_stats()));
     if (const auto warning = odometry_warning(odometry.odometry_stats())) warnings.push_back(*warning);

@@ -48,7 +48,9 @@ MessageCounts count_messages(const std::vector<CarmenMessage>& messages) {
 }
 
 std::vector<CarmenMessage> read_log(const std::string& path, Progress& progress) {
-  CarmenReader reader(path);
+  CarmenReaderOptions as_logged;
+  as_logged.repair_reverse_odometry = false;  // faults are injected into the log as it is
+  CarmenReader reader(path, as_logged);
   std::vector<CarmenMessage> messages;
   while (auto message = reader.next()) {
     messages.push_back(std::move(*message));

@@ -50,9 +50,12 @@ void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const s
              number_in(0.0, std::numeric_limits<double>::infinity(), true, "m"),
              range_max_help.empty() ? "m: FLASER/RLASER readings at or above are no return (default: the log's PARAM, else 80)"
                                     : range_max_help);
+  command->add_flag_callback("--raw-odometry", [&options] { options.repair_reverse_odometry = false; },
+                             "Keep the odometry as logged: do not reverse the travel of steps that move forward while ODOM tv < 0 "
+                             "(odometry that integrates reversing as forward driving, like FR079's)");
 }
 
-std::vector<std::string> geometry_warnings(const CarmenReader& reader) {
+std::vector<std::string> reader_warnings(const CarmenReader& reader) {
   std::vector<std::string> warnings;
   for (const OldLaserGeometry& geometry : reader.stats().old_laser_geometries) {
     for (const std::string& warning : geometry.warnings) {
@@ -60,11 +63,17 @@ std::vector<std::string> geometry_warnings(const CarmenReader& reader) {
                                      geometry.rear ? "RLASER" : "FLASER", geometry.beams, warning));
     }
   }
+  if (reader.stats().odometry_steps_reversed > 0) {
+    warnings.push_back(fmt::format(
+        "{}: warning: the odometry integrates reversing as forward driving: {} steps that moved forward while ODOM tv < 0 "
+        "were repaired (--raw-odometry keeps them)",
+        reader.path(), reader.stats().odometry_steps_reversed));
+  }
   return warnings;
 }
 
-void print_geometry_warnings(const CarmenReader& reader) {
-  for (const std::string& warning : geometry_warnings(reader)) std::fputs((warning + "\n").c_str(), stderr);
+void print_reader_warnings(const CarmenReader& reader) {
+  for (const std::string& warning : reader_warnings(reader)) std::fputs((warning + "\n").c_str(), stderr);
 }
 
 }  // namespace slam2d::cli

@@ -1,8 +1,10 @@
 #pragma once
-// The sensor-geometry overrides shared by every command that reads a CARMEN log (info, map,
-// localize, odometry, match-bench): --fov, --angle-min, --angle-increment in degrees and
-// --range-max in metres on the command line, radians and metres in CarmenReaderOptions. They beat
-// the log's PARAM lines and the CARMEN convention (docs/sensor_geometry.md).
+// The reader options shared by every command that reads a CARMEN log (info, map, localize,
+// odometry, match-bench): the sensor-geometry overrides --fov, --angle-min, --angle-increment in
+// degrees and --range-max in metres on the command line, radians and metres in CarmenReaderOptions,
+// which beat the log's PARAM lines and the CARMEN convention (docs/sensor_geometry.md); and
+// --raw-odometry, which turns off the repair of odometry that integrates reversing as forward
+// driving (docs/odometry_guard.md). Also what the reader decided, for the summaries.
 
 #include <CLI/CLI.hpp>
 
@@ -13,17 +15,19 @@
 
 namespace slam2d::cli {
 
-/// Adds --fov DEG, --angle-min DEG, --angle-increment DEG and --range-max M to `command`, writing
+/// Adds --fov DEG, --angle-min DEG, --angle-increment DEG, --range-max M and --raw-odometry to `command`, writing
 /// into `options` (which must outlive the parse). Each value is checked when parsed: the field of
 /// view in (0, 360], the increment and the range positive, all finite. `range_max_help` replaces
 /// the help of --range-max where the command gives it a further meaning.
 void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const std::string& range_max_help = "");
 
-/// The warnings of the FLASER/RLASER geometries `reader` decided (PARAM lines dropped, ambiguous
-/// units), one line each: "PATH:LINE: warning: FLASER geometry, N beams: ...". Call it after reading.
-std::vector<std::string> geometry_warnings(const CarmenReader& reader);
+/// The warnings of what `reader` decided, one line each: the FLASER/RLASER geometries (PARAM lines
+/// dropped, ambiguous units: "PATH:LINE: warning: FLASER geometry, N beams: ...") and the odometry
+/// steps it repaired for reversing ("PATH: warning: the odometry integrates reversing as forward
+/// driving: ..."). Call it after reading.
+std::vector<std::string> reader_warnings(const CarmenReader& reader);
 
 /// The same on stderr.
-void print_geometry_warnings(const CarmenReader& reader);
+void print_reader_warnings(const CarmenReader& reader);
 
 }  // namespace slam2d::cli

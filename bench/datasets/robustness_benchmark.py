@@ -86,8 +86,7 @@ METHODS = ["hector", "graph", "rbpf", "pl-icp", "mcl", "mcl-global"]
 # log's first scan in that map (docs/methods/localization.md); ACES has none known, so no MCL row.
 LOCALIZATION = {
     "intel": {"corrected": "intel/intel-corrected.log.gz", "initial": "-0.0718,-0.1626,0.2200", "extra": []},
-    "fr079": {"corrected": "fr079/freiburg-079-corrected.log.gz", "initial": "0.0012,-0.0011,0.0",
-              "extra": ["--reverse-from-tv"]},
+    "fr079": {"corrected": "fr079/freiburg-079-corrected.log.gz", "initial": "0.0012,-0.0011,0.0", "extra": []},
 }
 QUICK = {"logs": ["aces"], "corrected_logs": ["edmonton", "seattle"], "severities": ["severe"],
          "faults": ["stall", "wheel-scale", "decimate", "range-max", "spurious-short"], "methods": ["hector", "pl-icp"]}

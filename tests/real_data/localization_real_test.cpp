@@ -5,7 +5,7 @@
 // docs/methods/localization.md), scored by the relation error; MCL with its default settings
 // localizes globally within the first minute, at the right place (every localized step near a
 // run tracked from the known start), and is then as accurate. On FR079 (same procedure, odometry
-// repaired by ReverseOdometryRepair) MCL tracks the whole log from the corrected log's first
+// repaired for reversing by the reader) MCL tracks the whole log from the corrected log's first
 // pose, through the 17 s that the map does not explain (docs/methods/localization.md, "Recovery
 // set"), without handing the filter to the look-alike wing, and a global start converges at the
 // right wing. In the largest building, Acapulco (the corrected log, ~4400 m^2 of free space),
@@ -26,7 +26,6 @@
 #include "slam2d/io/relations.hpp"
 #include "slam2d/localization/ekf.hpp"
 #include "slam2d/localization/mcl.hpp"
-#include "slam2d/localization/odometry_repair.hpp"
 #include "slam2d/localization/session.hpp"
 #include "support/test_support.hpp"
 
@@ -42,17 +41,14 @@ OccupancyMap map_from_corrected_log(const std::string& path) {
   return grid.to_occupancy_map();
 }
 
-// Runs the localizer over the first `max_scans` front-laser scans of the raw log, the odometry
-// repaired for reversing when `reverse_from_tv`.
-LocalizationSession& localize(LocalizationSession& session, const std::string& path, std::size_t max_scans,
-                              bool reverse_from_tv = false) {
+// Runs the localizer over the first `max_scans` front-laser scans of the raw log (the reader
+// repairs FR079's reversing by default).
+LocalizationSession& localize(LocalizationSession& session, const std::string& path, std::size_t max_scans) {
   CarmenReader reader(path);
-  ReverseOdometryRepair repair;
   while (auto message = reader.next()) {
-    if (const auto* odometry = std::get_if<OdometryMessage>(&*message)) repair.observe(odometry->reading);
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
-    session.add(reverse_from_tv ? repair.repair(laser->odom_pose) : laser->odom_pose, laser->scan);
+    session.add(laser->odom_pose, laser->scan);
     if (session.summary().scans == max_scans) break;
   }
   return session;
@@ -138,7 +134,7 @@ TEST(LocalizationRealData, MclTracksFr079ThroughThePartTheMapMisses) {
   MonteCarloLocalization mcl(map, MclConfig{.seed = 1});
   mcl.initialize(SE2(0.0012, -0.0011, 0.0), covariance_from_sigmas(0.3, 0.3, 0.2));
   LocalizationSession session(mcl);
-  localize(session, (data / "fr079" / "fr079.clf.gz").string(), 100000, true);
+  localize(session, (data / "fr079" / "fr079.clf.gz").string(), 100000);
   const Trajectory& trajectory = session.trajectory();
   const RelationErrorResult error =
       error_between(trajectory, read_relations((data / "fr079" / "fr079.relations").string()), trajectory.front().stamp,
@@ -156,11 +152,11 @@ TEST(LocalizationRealData, MclLocalizesFr079GloballyAtTheRightWing) {
   MonteCarloLocalization tracker(map, MclConfig{.seed = 1});
   tracker.initialize(SE2(0.0012, -0.0011, 0.0), covariance_from_sigmas(0.3, 0.3, 0.2));
   LocalizationSession reference(tracker);
-  localize(reference, log, 1500, true);
+  localize(reference, log, 1500);
   MonteCarloLocalization mcl(map, MclConfig{.seed = 1});
   mcl.initialize_global();
   LocalizationSession session(mcl);
-  localize(session, log, 1500, true);  // 330 s, through the stretch the map misses
+  localize(session, log, 1500);  // 330 s, through the stretch the map misses
   ASSERT_TRUE(session.summary().converged_at_s.has_value());
   EXPECT_LT(*session.summary().converged_at_s, 30.0);  // measured 9.0 s; the first report used to be at the other wing
   const auto [wrong, localized] = wrong_localized(session, reference.trajectory(), 1.0);

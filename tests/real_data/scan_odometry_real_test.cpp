@@ -63,13 +63,16 @@ TEST_P(ScanOdometryRealData, PlIcpBeatsWheelOdometryOnRelations) {
 }
 
 // Measured (mean translational / rotational relation error, wheel odometry in brackets): Intel
-// 0.766 m / 3.7 deg (7.37 m), ACES 0.415 m / 1.1 deg (0.549 m), FR079 1.83 m / 8.1 deg (6.50 m).
-// Intel's bound is CSM's figure; the others sit 10-20 % above the measurement.
+// 0.791 m / 3.7 deg (7.37 m), ACES 0.415 m / 1.1 deg (0.549 m), FR079 1.74 m / 10.7 deg (5.03 m).
+// Intel's bound is CSM's figure; the others sit 10-20 % above the measurement. FR079 with its
+// odometry as logged (reversing integrated as forward, 6.50 m) scored 1.83 m / 8.1 deg: the
+// reader's repair of the reversing improves the translation, and moves the heading drift of the
+// longest relations, which no loop closure bounds.
 INSTANTIATE_TEST_SUITE_P(
     Kuemmerle2009, ScanOdometryRealData,
     ::testing::Values(OdometryLog{"intel", "intel/intel.clf.gz", "intel/intel.relations", 0.824, 4.5},
                       OdometryLog{"aces", "aces/aces.clf.gz", "aces/aces.relations", 0.5, 1.4},
-                      OdometryLog{"fr079", "fr079/fr079.clf.gz", "fr079/fr079.relations", 2.2, 10.0}),
+                      OdometryLog{"fr079", "fr079/fr079.clf.gz", "fr079/fr079.relations", 2.2, 12.5}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace

@@ -26,6 +26,10 @@ void validate(const OdometryGuardConfig& config) {
   check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
   check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
   check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
+  check(positive(config.startup_acceleration) && positive(config.startup_angular_acceleration),
+        "OdometryGuardConfig: startup_acceleration and startup_angular_acceleration must be finite and > 0");
+  check(std::isfinite(config.max_startup_time) && config.max_startup_time >= config.min_time_step,
+        "OdometryGuardConfig: max_startup_time must be finite and >= min_time_step");
 }
 
 OdometryGuard::OdometryGuard(const OdometryGuardConfig& config) : config_(config) { validate(config_); }
@@ -62,8 +66,8 @@ bool OdometryGuard::is_frozen(const SE2& increment) const {
 }
 
 // The state machine of the header: stall (frozen after motion) until the pose moves; a catch-up
-// when it moves after standing still for stall_duration (after a stall, or after a rest during
-// which the robot may have moved unseen); otherwise a jump when the increment is out of bounds.
+// when it moves after a stall, or after a rest of stall_duration or more by more than a robot
+// driving off could (it may have moved unseen); otherwise a jump when the increment is out of bounds.
 OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood) {
   const double translation = increment.translation().norm();
   const double rotation = std::abs(increment.theta());
@@ -77,7 +81,7 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     return OdometryFault::kStall;
   }
   const bool moving = translation > config_.moving_translation || rotation > config_.moving_rotation;
-  if (stalled_ || stood >= config_.stall_duration) {
+  if (stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt))) {
     stalled_ = false;
     was_moving_ = moving;
     ++stats_.catch_ups;
@@ -89,6 +93,12 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
   }
   was_moving_ = moving;
   return OdometryFault::kNone;
+}
+
+bool OdometryGuard::exceeds_startup(const SE2& increment, double dt) const {
+  const double step = std::clamp(dt, config_.min_time_step, config_.max_startup_time);
+  return increment.translation().norm() > 0.5 * config_.startup_acceleration * step * step ||
+         std::abs(increment.theta()) > 0.5 * config_.startup_angular_acceleration * step * step;
 }
 
 bool OdometryGuard::exceeds_bounds(const SE2& increment, double dt) const {

@@ -25,6 +25,13 @@
 // line otherwise. What was decided, and why, is in CarmenStats::old_laser_geometries.
 // ROBOTLASER1 and RAWLASER declare their own angles and maximum range; ROBOTLASER1's mounting is
 // robot_pose^-1 * laser_pose, RAWLASER's is the identity (a raw scan has no robot).
+//
+// Odometry that integrates reversing as forward driving (FR079) is repaired by default: a laser
+// message's odom_pose is rebuilt from the scan-to-scan increments, the translation of an increment
+// scaled by the signed share of its travel, sum tv / sum |tv| over the ODOM messages since the pose
+// last moved (-1 mirrors a step driven wholly in reverse; core/odometry_repair.hpp, which also says
+// when it trusts tv's sign). Only LaserMessage::odom_pose changes; ODOM lines and the laser_pose
+// triple are returned as logged. docs/odometry_guard.md.
 
 #include <cstddef>
 #include <map>
@@ -75,6 +82,9 @@ struct CarmenReaderOptions {
   std::optional<double> range_max;
   double default_range_max = 80.0;  // m, SICK LMS in its 80 m mode (returns ~81.9 m for "no return")
   double range_min = 0.0;           // m
+  /// Repair laser odometry that integrates reversing as forward driving (see above); false gives
+  /// every pose as logged (`--raw-odometry`).
+  bool repair_reverse_odometry = true;
 };
 
 /// Where a FLASER/RLASER geometry value came from.
@@ -124,6 +134,10 @@ struct CarmenStats {
   std::size_t backwards_laser_timestamps = 0;  // steps back in time, over laser messages only
   std::optional<double> first_stamp;     // s, of the first timestamped message
   std::optional<double> last_stamp;      // s, of the last timestamped message
+  /// Laser odometry increments repaired for reversing (some or all of their travel), and whether the repair
+  /// switched itself off because the log's poses record reversing themselves.
+  std::size_t odometry_steps_reversed = 0;
+  bool odometry_poses_record_reversing = false;
   /// FLASER/RLASER geometries in the order they were decided (one per laser and beam count).
   std::vector<OldLaserGeometry> old_laser_geometries;
   /// The front (FLASER) geometry used by the most scans, or null when the log has no FLASER.

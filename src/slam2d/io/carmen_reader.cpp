@@ -50,6 +50,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry_repair.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/number_format.hpp"
 #include "slam2d/io/text_input.hpp"
@@ -558,6 +559,7 @@ struct CarmenReader::Impl {
   std::string line;
   std::vector<std::string_view> tokens;
   std::optional<double> previous_stamp;
+  ReverseOdometryRepair reverse_repair;
   std::optional<double> previous_laser_stamp;
   double total_bytes;      // uncompressed size, negative if unknown
   double bytes_read = 0.0;  // uncompressed bytes of the lines read so far
@@ -787,9 +789,15 @@ std::optional<CarmenMessage> CarmenReader::next() {
     if (auto* laser = std::get_if<LaserMessage>(&*message)) {
       ++s.stats.laser_messages;
       s.note_stamp(laser->scan.stamp, true);
+      if (laser->has_poses && s.options.repair_reverse_odometry) {
+        laser->odom_pose = s.reverse_repair.repair(laser->odom_pose);
+        s.stats.odometry_steps_reversed = s.reverse_repair.reversed_steps();
+        s.stats.odometry_poses_record_reversing = s.reverse_repair.poses_record_reversing();
+      }
     } else if (auto* odometry = std::get_if<OdometryMessage>(&*message)) {
       ++s.stats.odometry_messages;
       s.note_stamp(odometry->reading.stamp, false);
+      s.reverse_repair.observe(odometry->reading);
     } else {
       ++s.stats.true_pose_messages;
       s.note_stamp(std::get<TruePoseMessage>(*message).stamp, false);

@@ -136,8 +136,8 @@ struct LoopClosureConfig {
   int max_chains = 1;                // 1, >= 1: chains searched over the large window per keyframe, nearest first
   // Chains already linked in the graph (within min_path_distance along its edges) are not searched
   // over the large window again; up to this many of them are matched over the small window per
-  // keyframe instead. Off by default: with the earlier local-map front end they bent FR079's map
-  // (2.0 m mean relation error against 0.09 m without them) and helped Intel (0.019 m against 0.024 m).
+  // keyframe instead. Off by default: small-window links to a chain already linked bent a map with
+  // many revisits far more than they helped elsewhere (docs/defaults.md, with the figures).
   int max_near_chains = 0;           // 1, >= 0
   // The large window is searched from every n-th keyframe (Cartographer's sampling of constraint
   // searches, deterministic); near chains from every one. Every 8th keyframe (about every 1.6 m)

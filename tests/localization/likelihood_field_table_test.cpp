@@ -1,5 +1,4 @@
-// ReverseOdometryRepair on hand-made odometry (FR079 integrates reversing as forward driving), and
-// the likelihood-field table of LocalizationMap (tiled, with a border) against the field itself.
+// The likelihood-field table of LocalizationMap (tiled, with a border) against the field itself.
 
 #include <gtest/gtest.h>
 
@@ -9,50 +8,9 @@
 
 #include "slam2d/core/rng.hpp"
 #include "slam2d/localization/localization_map.hpp"
-#include "slam2d/localization/odometry_repair.hpp"
 
 namespace slam2d {
 namespace {
-
-OdometryReading with_tv(double tv) {
-  OdometryReading reading;
-  reading.tv = tv;
-  return reading;
-}
-
-TEST(ReverseOdometryRepair, MirrorsForwardStepsWhileTvIsNegative) {
-  ReverseOdometryRepair repair;
-  const double half_pi = std::numbers::pi / 2;
-  // The first scan: its raw pose is kept.
-  EXPECT_TRUE(repair.repair(SE2(1.0, 2.0, half_pi)).is_approx(SE2(1.0, 2.0, half_pi)));
-  // Facing +y, the raw pose advances 0.5 m along +y and turns 0.1 rad while tv < 0: the robot
-  // backed up 0.5 m (to y = 1.5), the turn is kept.
-  repair.observe(with_tv(-0.4));
-  repair.observe(with_tv(-0.5));
-  EXPECT_TRUE(repair.repair(SE2(1.0, 2.5, half_pi + 0.1)).is_approx(SE2(1.0, 1.5, half_pi + 0.1), 1e-12));
-  EXPECT_EQ(repair.reversed_steps(), 1u);
-  // Forward driving with tv > 0: the step (0.2 m along the new heading) is applied as it is, from
-  // the repaired pose.
-  repair.observe(with_tv(0.3));
-  const SE2 raw_next = SE2(1.0, 2.5, half_pi + 0.1) * SE2(0.2, 0.0, 0.0);
-  const SE2 expected = SE2(1.0, 1.5, half_pi + 0.1) * SE2(0.2, 0.0, 0.0);
-  EXPECT_TRUE(repair.repair(raw_next).is_approx(expected, 1e-12));
-  EXPECT_EQ(repair.reversed_steps(), 1u);
-}
-
-TEST(ReverseOdometryRepair, KeepsConsistentStepsAndStepsWithoutVelocity) {
-  ReverseOdometryRepair repair;
-  repair.repair(SE2(0.0, 0.0, 0.0));
-  // Already backwards while tv < 0: kept.
-  repair.observe(with_tv(-0.5));
-  EXPECT_TRUE(repair.repair(SE2(-0.3, 0.0, 0.0)).is_approx(SE2(-0.3, 0.0, 0.0), 1e-12));
-  // No ODOM message since the last scan: kept, whatever the last tv was.
-  EXPECT_TRUE(repair.repair(SE2(0.2, 0.0, 0.0)).is_approx(SE2(0.2, 0.0, 0.0), 1e-12));
-  // Turning on the spot with tv < 0: no translation to mirror.
-  repair.observe(with_tv(-0.01));
-  EXPECT_TRUE(repair.repair(SE2(0.2, 0.0, 0.5)).is_approx(SE2(0.2, 0.0, 0.5), 1e-12));
-  EXPECT_EQ(repair.reversed_steps(), 0u);
-}
 
 // A 6 m x 4 m map at 0.1 m, rotated, with a few obstacle cells.
 OccupancyMap small_map() {
