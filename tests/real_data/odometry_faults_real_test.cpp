@@ -134,12 +134,6 @@ TEST(OdometryStallRealData, HectorOnAcesStaysUnderTwentyCentimetresInEachOfThree
   EXPECT_LT(sum / 3.0, 0.18);  // before the guard (a2562c2): 0.140, 1.076, 1.340 m
 }
 
-}  // namespace
-}  // namespace slam2d
-
-namespace slam2d {
-namespace {
-
 // As `slam2d perturb` then `slam2d map` do it: the fault goes into the log as logged, and the log
 // written is read back with the reader's options (the reverse-driving repair on or off).
 std::vector<LaserMessage> perturbed_scans(const std::filesystem::path& log, const std::string& fault,
