@@ -33,7 +33,7 @@ struct MappingRun {
   JsonObject method_summary;       // what the method adds to summary.json
   std::size_t backwards_timestamps = 0;
   std::size_t skipped_lines = 0;
-  std::size_t odometry_steps_reversed = 0;  // mirrored by the reader's reverse-driving repair
+  std::size_t odometry_steps_reversed = 0;  // repaired by the reader (reversing integrated as forward)
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
   std::vector<std::string> warnings;  // what the reader and the method could not decide
 };

@@ -4,8 +4,9 @@
 // In the FR079 raw log (fr079.clf.gz) the ODOM velocity tv is negative while the robot backs up
 // (e.g. 197.9-200.4 s after the first scan: tv = -0.5 m/s), yet the odometry pose x, y advances
 // along the heading: the pose integrates |tv|. The relations of Kuemmerle et al. 2009 and the
-// SLAM-corrected log agree that the robot moved backwards there; 294 of the 4934 scan-to-scan
-// odometry steps of that log are affected. Intel and ACES have none. Every method that takes the
+// SLAM-corrected log agree that the robot moved backwards there: 294 of the 4934 scan-to-scan
+// odometry steps of that log move forward while tv < 0, and 317 are repaired with those that back
+// up and drive on within one step. Intel and ACES have none. Every method that takes the
 // odometry as its motion guess is sent the wrong way by such a step; scan matching catches it
 // while the scans are dense, and fails when they are not (FR079 with every second scan dropped:
 // graph SLAM 0.66 m instead of 0.034 m).
