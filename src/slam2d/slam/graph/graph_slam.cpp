@@ -15,6 +15,9 @@ HectorSlamConfig default_tracking_config() {
   HectorSlamConfig config;
   config.prior_information_translation = 100.0;  // 1/m^2: sigma 0.1 m
   config.prior_information_rotation = 300.0;     // 1/rad^2: sigma 0.058 rad
+  config.prior_sigma_per_metre = 0.0;            // the same weak prior for every increment,
+  config.prior_kernel = {};                      // a plain Gaussian,
+  config.prior_at_catch_ups = true;              // catch-ups included (degraded acapulco: 0.43 m, 1.00 without)
   config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands
   return config;
 }

@@ -52,6 +52,8 @@ void validate(const HectorSlamConfig& config) {
         "HectorSlamConfig: rotation_margin_without_odometry must be in [0, 1)");
   check(non_negative(config.rotation_search_without_odometry),
         "HectorSlamConfig: rotation_search_without_odometry must be finite and >= 0");
+  check(non_negative(config.prior_sigma_per_metre), "HectorSlamConfig: prior_sigma_per_metre must be finite and >= 0");
+  validate(config.prior_kernel);
   validate(config.matcher);
 }
 
@@ -165,15 +167,19 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
   return std::nullopt;
 }
 
-// The Gaussian prior at the motion prediction (constant velocity when the guess is the last pose);
-// none where the odometry prior is in force but this scan's increment is not trusted.
+// The Gaussian prior at the odometry prediction; none without odometry or where the guard did not
+// trust this scan's increment, and at a catch-up only if config.prior_at_catch_ups.
 std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan) const {
   if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
-  if (config_.prior == MotionPrior::kOdometry && !odometry_trusted()) return std::nullopt;
-  const MotionPrior model = config_.prior == MotionPrior::kLastPose ? MotionPrior::kConstantVelocity : config_.prior;
-  const Eigen::Vector3d information(config_.prior_information_translation, config_.prior_information_translation,
-                                    config_.prior_information_rotation);
-  return PosePrior{.mean = predict(scan, model), .information = information.asDiagonal()};
+  if (!odometry_trusted() || (odometry_.fault == OdometryFault::kCatchUp && !config_.prior_at_catch_ups)) return std::nullopt;
+  // Translation information 1 / (sigma at rest + growth * distance travelled)^2.
+  double translation = config_.prior_information_translation;
+  if (translation > 0.0) {
+    const double sigma = 1.0 / std::sqrt(translation) + config_.prior_sigma_per_metre * odometry_.increment.translation().norm();
+    translation = 1.0 / (sigma * sigma);
+  }
+  const Eigen::Vector3d information(translation, translation, config_.prior_information_rotation);
+  return PosePrior{.mean = predict(scan), .information = information.asDiagonal(), .kernel = config_.prior_kernel};
 }
 
 SE2 HectorSlam::predict(const LaserScan& scan) const { return predict(scan, config_.prior); }

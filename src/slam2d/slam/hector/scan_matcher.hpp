@@ -65,9 +65,14 @@ struct HectorMatchResult {
 /// An optional Gaussian prior on the pose (not in the paper): adds the residual xi - mean with
 /// weight `information` (1/m^2, 1/rad^2) to the normal equations, so that directions the scan
 /// leaves undetermined (a corridor's axis) follow the motion prediction instead of staying put.
+/// The kernel acts on the prior's Mahalanobis distance m = sqrt(r^T information r) (IRLS weight
+/// kernel.weight(m)): with a Cauchy kernel the prior gives way where the scan shows the
+/// prediction many sigmas off (odometry counting a reverse as forward driving); kNone keeps the
+/// plain Gaussian.
 struct PosePrior {
   SE2 mean;
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  RobustKernel kernel{};
 };
 
 /// Adds the prior's residual at pose xi to the equations.
