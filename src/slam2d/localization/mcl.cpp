@@ -30,6 +30,7 @@ void validate(const MclConfig& config) {
         "mcl: takeover_updates, recovery_updates and displaced_updates must be >= 1");
   check(config.status.lost_after >= 1, "mcl: status.lost_after must be >= 1");
   check(config.place_settle_updates >= 0, "mcl: place_settle_updates must be >= 0");
+  check(std::isfinite(config.place_min_travel) && config.place_min_travel >= 0.0, "mcl: place_min_travel must be finite and >= 0");
   check(config.max_places >= 1 && config.place_radius_xy > 0.0 && config.place_radius_theta > 0.0 && config.place_margin > 0.0,
         "mcl: max_places must be >= 1, place_radius_xy, place_radius_theta and place_margin > 0");
   validate(config.global);
@@ -127,6 +128,7 @@ void MonteCarloLocalization::predict(const OdometryControl& u) {
   const Eigen::Vector3d sigmas = control_covariance(u, config_.motion).diagonal().cwiseSqrt();
   for (SE2& p : particles_) p = sample_odometry_motion(p, u, sigmas, rng_);
   for (SE2& p : recovery_) p = sample_odometry_motion(p, u, sigmas, rng_);
+  place_travel_ += std::abs(u.trans);
 }
 
 MonteCarloLocalization::SetLikelihood MonteCarloLocalization::weigh_poses(const ScanBeams& beams,
@@ -209,7 +211,7 @@ void MonteCarloLocalization::weigh_places() {
     const std::uint32_t p = place_of_[i];
     const double lag = place_log_likelihood_[p] - leader;
     within_weights_[i] /= sum[p];
-    weights_[i] = lag < -config_.place_margin ? 0.0 : within_weights_[i] * std::exp(lag);
+    weights_[i] = lag < -config_.place_margin && places_decidable() ? 0.0 : within_weights_[i] * std::exp(lag);
     total += weights_[i];
   }
   for (double& w : weights_) w /= total;
@@ -226,7 +228,7 @@ void MonteCarloLocalization::resample_places() {
   }
   std::vector<std::size_t> kept;  // best first
   for (std::size_t p = 0; p < members.size(); ++p) {
-    if (!members[p].empty() && place_log_likelihood_[p] >= leader - config_.place_margin) kept.push_back(p);
+    if (!members[p].empty() && (place_log_likelihood_[p] >= leader - config_.place_margin || !places_decidable())) kept.push_back(p);
   }
   std::stable_sort(kept.begin(), kept.end(), [&](std::size_t a, std::size_t b) { return place_log_likelihood_[a] > place_log_likelihood_[b]; });
   // A place whose mean met a better place's joins it, its weights scaled by the evidence ratio.
@@ -433,6 +435,7 @@ LocalizationEstimate MonteCarloLocalization::search_update(const SE2& T_odom_rob
   }
   place_log_likelihood_.assign(places.size() > 1 ? places.size() : 0, 0.0);
   place_updates_ = 0;
+  place_travel_ = 0.0;
   if (places.size() <= 1) place_of_.clear();
   weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
   const ScanBeams beams = select_beams(scan, config_.max_beams, config_.usable_range);

@@ -40,9 +40,11 @@
 //    itself to an equal share, so a place cannot die because another explained a few scans a
 //    little better; its evidence is the sum over the updates of the log of the mean likelihood
 //    of its particles (p(z | place)), counted once the places have settled on their local best
-//    pose (place_settle_updates). A place place_margin below the best is dropped; places whose
-//    means meet merge. The filter is not localized while more than one place is left: it reports
-//    converged only when a single place dominates. Then plain MCL runs, KLD-sampling shrinks the set.
+//    pose (place_settle_updates). A place place_margin below the best is dropped, once the robot
+//    has driven place_min_travel since seeding (a turn on the spot shows one view, which a
+//    degraded scanner can match at a wrong place); places whose means meet merge. The filter is
+//    not localized while more than one place is left: it reports converged only when a single
+//    place dominates. Then plain MCL runs, KLD-sampling shrinks the set.
 //
 // One filter step (`update`): the odometry since the last filter update is accumulated; once the
 // robot has moved update_distance or turned update_angle, the particles are moved by samples of
@@ -98,6 +100,8 @@ struct MclConfig {
   double place_margin = 40.0;       // log-likelihood, > 0: a place this far below the best is dropped (one end point
                                     // explained at 0 m instead of unexplained is log(1.9 / 0.0017) = 7: about 6 end points)
   int place_settle_updates = 10;    // >= 0: updates after seeding before the places' evidence counts (they settle on their best pose)
+  double place_min_travel = 1.0;    // m, >= 0: no place is dropped before the robot drove this far since seeding
+                                    // (the place radius; picked on Intel with degraded scanners, docs/methods/localization.md)
   bool kld_sampling = true;         // false: always max_particles
   double kld_epsilon = 0.05;        // 1, > 0: bound on the KL divergence (Fox 2003)
   double kld_z = 2.326;             // 1: upper 1 - delta quantile of N(0, 1) (delta = 0.01)
@@ -199,6 +203,7 @@ class MonteCarloLocalization : public Localizer {
   /// Place evidence: sums each place's marginal likelihood, drops the places place_margin below
   /// the best, and sets the weights to the place posterior times the weights within each place.
   void weigh_places();
+  bool places_decidable() const { return place_travel_ >= config_.place_min_travel; }
   /// Resamples each place to an equal share of max_particles; merges places that met; ends the
   /// place phase when one is left.
   void resample_places();
@@ -208,6 +213,7 @@ class MonteCarloLocalization : public Localizer {
   std::vector<double> place_log_likelihood_;  // summed log marginal likelihood of each place
   std::vector<double> within_weights_;        // each particle's weight within its place
   int place_updates_ = 0;                     // sensor updates since the places were seeded
+  double place_travel_ = 0.0;                 // m travelled since the places were seeded
   SE2 odom_at_start_;                         // odometry pose at the first scan
   bool averages_started_ = false;             // w_slow, w_fast hold a value
   bool initialized_ = false;
