@@ -141,8 +141,9 @@ TEST(OdometryStallRealData, HectorOnAcesStaysUnderFifteenCentimetresInEachOfThre
 TEST(HectorOdometryPriorRealData, IntelStaysAtItsCleanErrorUnderSmallRangeNoise) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());
+  const std::vector<CarmenMessage> clean = read_messages(data / "intel/intel.clf.gz");
   for (const std::uint64_t seed : {1u, 2u, 3u}) {
-    std::vector<CarmenMessage> messages = read_messages(data / "intel/intel.clf.gz");
+    std::vector<CarmenMessage> messages = clean;
     apply_faults({parse_fault("range-noise:sigma=0.01")}, messages, seed);
     HectorSlam slam;
     for (const LaserMessage& laser : laser_messages(messages)) {

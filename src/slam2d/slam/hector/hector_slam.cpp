@@ -87,7 +87,7 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
     corrected = correct_rotational_distortion(scan, angular_rate(scan, inputs, step.prediction), config_.sweep_duration);
   }
   if (last_pose_) {  // Sec. IV-B/C: match against the map built so far
-    step.match = match(scan, corrected, inputs, step.prediction);
+    step.match = match(corrected, inputs, step.prediction);
     step.matched = true;
     step.T_map_robot = step.match.T_map_robot;
     step.covariance = step.match.covariance;
@@ -105,12 +105,11 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   return step;
 }
 
-HectorMatchResult HectorSlam::match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
-                                    const SE2& prediction) const {
+HectorMatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const {
   std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
   const bool with_odometry = odometry_trusted();
-  HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(scan) : std::nullopt);
+  HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt);
   if (const std::optional<UntrustedStarts> starts = untrusted_starts(); starts && starts->second) {
     HectorMatchResult second = match_from(points, *starts->second, false, std::nullopt);
     if (second.equations.cost < starts->second_factor * result.equations.cost) result = std::move(second);
@@ -169,7 +168,7 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
 
 // The Gaussian prior at the odometry prediction; none without odometry or where the guard did not
 // trust this scan's increment, and at a catch-up only if config.prior_at_catch_ups.
-std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan) const {
+std::optional<PosePrior> HectorSlam::pose_prior(const SE2& prediction) const {
   if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
   if (!odometry_trusted() || (odometry_.fault == OdometryFault::kCatchUp && !config_.prior_at_catch_ups)) return std::nullopt;
   // Translation information 1 / (sigma at rest + growth * distance travelled)^2.
@@ -179,14 +178,12 @@ std::optional<PosePrior> HectorSlam::pose_prior(const LaserScan& scan) const {
     translation = 1.0 / (sigma * sigma);
   }
   const Eigen::Vector3d information(translation, translation, config_.prior_information_rotation);
-  return PosePrior{.mean = predict(scan), .information = information.asDiagonal(), .kernel = config_.prior_kernel};
+  return PosePrior{.mean = prediction, .information = information.asDiagonal(), .kernel = config_.prior_kernel};
 }
 
-SE2 HectorSlam::predict(const LaserScan& scan) const { return predict(scan, config_.prior); }
-
-SE2 HectorSlam::predict(const LaserScan& scan, MotionPrior prior) const {
+SE2 HectorSlam::predict(const LaserScan& scan) const {
   if (!last_pose_) return SE2::identity();
-  switch (prior) {
+  switch (config_.prior) {
     case MotionPrior::kOdometry:
       if (odometry_.trusted()) return *last_pose_ * odometry_.increment;
       return untrusted_starts()->first;

@@ -121,8 +121,7 @@ class HectorSlam {
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
 
  private:
-  HectorMatchResult match(const LaserScan& scan, const LaserScan& corrected, const HectorInputs& inputs,
-                          const SE2& prediction) const;
+  HectorMatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
     std::optional<SE2> second;   // the competing start, if any
@@ -132,10 +131,9 @@ class HectorSlam {
                                const std::optional<PosePrior>& prior) const;
   std::optional<UntrustedStarts> untrusted_starts() const;
   double recovery_residual(bool with_odometry) const;
-  std::optional<PosePrior> pose_prior(const LaserScan& scan) const;
+  std::optional<PosePrior> pose_prior(const SE2& prediction) const;
   bool odometry_trusted() const;
   SE2 predict(const LaserScan& scan) const;
-  SE2 predict(const LaserScan& scan, MotionPrior prior) const;
   double angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const;
   bool needs_map_update(const SE2& T_map_robot) const;
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);

@@ -52,11 +52,11 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
 void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior) {
   Eigen::Vector3d r = T_map_robot.vector() - prior.mean.vector();
   r.z() = normalize_angle(r.z());
-  const double squared_distance = r.dot(prior.information * r);
-  const double weight = prior.kernel.weight(std::sqrt(squared_distance));
+  const double distance = std::sqrt(r.dot(prior.information * r));  // Mahalanobis
+  const double weight = prior.kernel.weight(distance);
   equations.H += weight * prior.information;  // J = I
   equations.b += weight * prior.information * r;
-  equations.cost += prior.kernel.cost(std::sqrt(squared_distance));
+  equations.cost += prior.kernel.cost(distance);
 }
 
 namespace {
