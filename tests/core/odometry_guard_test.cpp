@@ -56,6 +56,32 @@ TEST(OdometryGuard, FrozenPoseAfterMotionIsAStallAndTheCatchUpIsNotTrusted) {
   EXPECT_EQ(guard.stats().catch_ups, 1u);
 }
 
+// A stall is waited out (no map written at its scans) while its catch-up can still put the pose
+// right: up to max_held_stall seconds after the pose last changed; after that, and at the
+// catch-up, the maps follow the scan matching again.
+TEST(OdometryGuard, AStallHoldsTheMapUpToMaxHeldStall) {
+  std::vector<SE2> poses = straight_drive(60, 0.5);
+  for (int k = 11; k <= 40; ++k) poses[k] = poses[10];  // frozen 6 s after scan 10; scan 41 catches up
+  OdometryGuard guard(OdometryGuardConfig{.max_held_stall = 3.0});
+  const std::vector<OdometryCheck> checks = check_all(guard, poses);
+  for (int k = 1; k <= 11; ++k) EXPECT_FALSE(checks[k].hold_map) << k;  // trusted
+  for (int k = 12; k <= 40; ++k) {
+    ASSERT_EQ(checks[k].fault, OdometryFault::kStall) << k;
+    EXPECT_EQ(checks[k].hold_map, kScanPeriod * (k - 10) <= 3.0 + 1e-9) << k;
+  }
+  EXPECT_TRUE(checks[25].hold_map);
+  EXPECT_FALSE(checks[26].hold_map);
+  EXPECT_EQ(checks[41].fault, OdometryFault::kCatchUp);
+  EXPECT_FALSE(checks[41].hold_map);
+  // 0 holds nothing; a robot at rest is never held.
+  OdometryGuard never(OdometryGuardConfig{.max_held_stall = 0.0});
+  for (const OdometryCheck& check : check_all(never, poses)) EXPECT_FALSE(check.hold_map);
+  std::vector<SE2> resting{SE2(0, 0, 0), SE2(0.005, 0, 0)};
+  for (int k = 0; k < 20; ++k) resting.push_back(resting.back());
+  OdometryGuard at_rest;
+  for (const OdometryCheck& check : check_all(at_rest, resting)) EXPECT_FALSE(check.hold_map);
+}
+
 // Intel: a scan 1.2 ms after the last one carries its odometry pose; the odometry is slower
 // than the scanner there, not stalled.
 TEST(OdometryGuard, APoseRepeatedWithinTheStallDurationIsNotAStall) {
@@ -154,6 +180,7 @@ TEST(OdometryGuard, RejectsInvalidConfigs) {
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_speed = 0.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.min_time_step = -1.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.jump_rotation_slack = -0.1}), Error);
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_held_stall = -1.0}), Error);
 }
 
 }  // namespace

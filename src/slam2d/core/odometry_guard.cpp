@@ -26,6 +26,7 @@ void validate(const OdometryGuardConfig& config) {
   check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
   check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
   check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
+  check(non_negative(config.max_held_stall), "OdometryGuardConfig: max_held_stall must be finite and >= 0");
   check(positive(config.startup_acceleration) && positive(config.startup_angular_acceleration),
         "OdometryGuardConfig: startup_acceleration and startup_angular_acceleration must be finite and > 0");
   check(std::isfinite(config.max_startup_time) && config.max_startup_time >= config.min_time_step,
@@ -48,6 +49,7 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
     if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood);
     result.stall_start = stats_.stalls > stalls;
+    result.hold_map = result.fault == OdometryFault::kStall && stood <= config_.max_held_stall;
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
     // integrated): the increment after it may still carry that motion.
     lag_allowance_ = result.gap ? result.dt : 0.0;

@@ -29,6 +29,14 @@
 //    max_speed * dt + jump_translation_slack or max_turn_rate * dt + jump_rotation_slack, with dt
 //    at least min_time_step (stamps of real logs jitter and step back, so short or negative steps
 //    must not shrink the bound).
+//  - held: a stall's scans within `max_held_stall` seconds of the pose's last change. Within a
+//    stall a method places the robot by scan matching alone, which along a corridor does not see
+//    it move (ACES with a 10 s stall every 120 s: the robot drives 4 m, Hector's estimate 0.4 m);
+//    a map written at such poses is wrong for good, while the catch-up at the stall's end puts
+//    the pose right again. So Hector and graph SLAM's tracker write nothing into their maps at
+//    held scans and wait for the catch-up (the RBPF does not: one update over a long stall loses
+//    its particles on FR079; docs/odometry_guard.md, "Long stalls"). An odometry frozen for
+//    longer is taken as lost, and the maps follow the scan matching again (as without odometry).
 //  - gap: consecutive scans more than `gap` seconds apart (reported; the increment over a gap is
 //    checked like any other, against the longer dt). The odometry pose of the first scan after a
 //    gap may lag (ACES: the robot turns 1.4 rad during a 3 s gap, the scan after it shows 0.39 rad
@@ -70,6 +78,9 @@ struct OdometryGuardConfig {
   double startup_angular_acceleration = 4.0;  // rad/s^2, > 0
   double max_startup_time = 0.25;             // s, >= min_time_step: the startup bound's longest dt
   double gap = 1.0;                     // s, > 0: scans further apart are a gap
+  // s, >= 0: a stall this young is waited out (OdometryCheck::hold_map); 0 holds nothing. 30 s of
+  // driving is about what a catch-up's odometry still brings within the matchers' reach.
+  double max_held_stall = 30.0;
 };
 
 /// Throws Error for out-of-range values.
@@ -86,6 +97,7 @@ struct OdometryCheck {
   bool first = false;                   // the first scan: nothing to check
   bool stall_start = false;             // the first increment of a stall
   bool moved = false;                   // the pose changed (or the first scan): a later catch-up starts here
+  bool hold_map = false;                // a stall within max_held_stall: write no map at this scan, wait for the catch-up
   bool trusted() const { return fault == OdometryFault::kNone; }
 };
 

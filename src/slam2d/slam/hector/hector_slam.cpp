@@ -92,7 +92,7 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
     step.T_map_robot = step.match.T_map_robot;
     step.covariance = step.match.covariance;
   }
-  if (!last_pose_ || needs_map_update(step.T_map_robot)) {
+  if (!last_pose_ || (!odometry_.hold_map && needs_map_update(step.T_map_robot))) {
     integrate(corrected, inputs, step.T_map_robot);
     step.map_updated = true;
   }
