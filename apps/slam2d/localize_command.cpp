@@ -122,7 +122,7 @@ void run_localize(const LocalizeOptions& options) {
     const std::vector<double> by = parse_triple(options.kidnap_by, "--kidnap-by");
     kidnap = Kidnap{.at = *options.kidnap_at, .by = SE2(by[0], by[1], deg_to_rad(by[2]))};
   }
-  LocalizationSession session(*localizer, kidnap);
+  LocalizationSession session(*localizer, kidnap, OdometryGuardConfig{}, &map);
   CarmenReader reader(options.log, options.geometry);
   Progress progress("localize", options.quiet);
   while (auto message = reader.next()) {

@@ -2,27 +2,49 @@
 
 #include <ctime>
 
+#include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/localization/sensor_model.hpp"
+
 namespace slam2d {
 
+namespace {
+
+constexpr int kStallBeams = 180;                // beams matched within a stall
+constexpr double kStallMinInlierFraction = 0.5; // of the end points, within ScanToMapConfig::inlier_distance
+
+}  // namespace
+
 LocalizationSession::LocalizationSession(Localizer& localizer, std::optional<Kidnap> kidnap,
-                                         const OdometryGuardConfig& odometry_guard)
-    : localizer_(localizer), kidnap_(kidnap), odometry_guard_(odometry_guard) {}
+                                         const OdometryGuardConfig& odometry_guard, const LocalizationMap* map)
+    : localizer_(localizer), kidnap_(kidnap), odometry_guard_(odometry_guard), map_(map) {}
+
+// The motion from the last estimate to the scan matched in the map from there; none for a poor fit.
+SE2 LocalizationSession::stall_motion(const LaserScan& scan) const {
+  const ScanBeams beams = select_beams(scan, kStallBeams, scan.range_max);
+  const ScanToMapResult match = match_scan_to_map(map_->field(), beams.points_robot, last_.pose);
+  if (!match.converged || match.inlier_fraction < kStallMinInlierFraction) return SE2();
+  return last_.pose.between(match.T_map_robot);
+}
 
 const LocalizationEstimate& LocalizationSession::add(const SE2& T_odom_robot, const LaserScan& scan) {
   const OdometryCheck odometry = odometry_guard_.check(scan.stamp, T_odom_robot);
   if (summary_.scans == 0) {
     first_stamp_ = scan.stamp;
     seen_odom_ = T_odom_robot;
-  } else if (odometry.trusted() || odometry.fault == OdometryFault::kCatchUp) {
-    // A localizer predicts from odometry alone: during a stall nothing moved it, so the catch-up is
-    // motion not yet counted, and is kept. A jump beyond what the robot could do moves nothing.
+  } else if (odometry.trusted()) {
     seen_odom_ = seen_odom_ * odometry.increment;
+  } else if (odometry.fault == OdometryFault::kCatchUp) {
+    seen_odom_ = seen_at_moved_ * odometry.increment;
+  } else if (odometry.fault == OdometryFault::kStall && map_ != nullptr && last_.localized) {
+    seen_odom_ = seen_odom_ * stall_motion(scan);
   }
   const double t = scan.stamp - first_stamp_;
   if (kidnap_ && !summary_.kidnapped_at_s && t >= kidnap_->at) {
     seen_odom_ = seen_odom_ * kidnap_->by;
+    seen_at_moved_ = seen_at_moved_ * kidnap_->by;
     summary_.kidnapped_at_s = t;
   }
+  if (odometry.moved) seen_at_moved_ = seen_odom_;
   const std::clock_t start = std::clock();
   const bool was_localized = last_.localized;
   last_ = localizer_.update(seen_odom_, scan);
