@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -23,6 +24,7 @@ struct RbpfWorkers {
 namespace {
 
 constexpr int kMaxThreads = 256;
+constexpr double kSecondStartAdvantage = 0.8;  // a catch-up's second start wins with this share of the first's cost
 
 bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
 
@@ -188,6 +190,10 @@ bool RbpfSlam::resample_if_needed() {
 // odometry's increment when the guard trusts it; a catch-up from the one at the scan where the
 // wheel odometry last moved (the catch-up carries the motion since then); else not moved. Then matched
 // against the best particle's map (without the motion prior when the increment was not trusted).
+// At a catch-up the previous scan's pose competes as a second start and wins with a fit a fifth
+// better (Hector's rule, HectorSlam::untrusted_starts): a catch-up over a stall in which the robot
+// reversed may carry the reversing wrong (FR079 with a 1.2 s stall every 60 s from +100 s: 0.33 m
+// over three seeds, 0.037 m with the second start).
 SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry) {
   SE2 delta;
   if (odometry.trusted()) delta = odometry.increment;
@@ -203,7 +209,17 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
     if (!odometry.trusted()) matching.motion_prior_weight = 0.0;
     const ProposalResult match = improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion),
                                                    matching, /*fit=*/false);
-    if (match.matched) corrected = last_corrected_odometry_ * previous.between(match.x_star);
+    std::optional<SE2> matched = match.matched ? std::optional(match.x_star) : std::nullopt;
+    if (odometry.fault == OdometryFault::kCatchUp) {
+      const ProposalResult second = improved_proposal(particle.map, points, previous, motion_sigmas(SE2(), config_.motion),
+                                                      matching, /*fit=*/false);
+      const SE2 alternative = second.matched ? second.x_star : previous;
+      const double sigma = config_.proposal.likelihood_sigma;
+      const double cost = -log_observation_likelihood(particle.map.level(0), points, matched.value_or(predicted), sigma);
+      const double alternative_cost = -log_observation_likelihood(particle.map.level(0), points, alternative, sigma);
+      if (alternative_cost < kSecondStartAdvantage * cost) matched = alternative;
+    }
+    if (matched) corrected = last_corrected_odometry_ * previous.between(*matched);
   }
   last_corrected_odometry_ = corrected;
   if (odometry.moved) last_moved_corrected_ = corrected;
