@@ -59,6 +59,7 @@ CORRECTED_LOGS = ["acapulco", "belgioioso", "edmonton", "fhw", "freiburg-101", "
 FAULTS = {
     "stall": ("stall:every=60,duration=1.2", "stall:every=60,duration=3"),
     "odom-gap": ("odom-gap:every=60,duration=1.2", "odom-gap:every=60,duration=3"),
+    "odom-reset": ("odom-reset:every=120", "odom-reset:every=30"),
     "wheel-scale": ("wheel-scale:translation=1.02", "wheel-scale:translation=1.05,rotation=1.02"),
     "heading-drift": ("heading-drift:rate=0.5", "heading-drift:rate=2"),
     "scan-gap": ("scan-gap:every=60,duration=1.2", "scan-gap:every=60,duration=3"),

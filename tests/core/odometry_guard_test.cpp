@@ -82,6 +82,22 @@ TEST(OdometryGuard, AStallHoldsTheMapUpToMaxHeldStall) {
   for (const OdometryCheck& check : check_all(at_rest, resting)) EXPECT_FALSE(check.hold_map);
 }
 
+// An odometry that restarts from its origin while the robot stands: the first increment after the
+// rest is beyond what the robot could have driven since the pose last changed, so it is a jump,
+// not a catch-up applied from where the odometry last moved.
+TEST(OdometryGuard, ARestartAfterARestIsAJumpNotACatchUp) {
+  std::vector<SE2> poses{SE2(20.0, 5.0, 1.0), SE2(20.05, 5.0, 1.0)};
+  for (int k = 0; k < 10; ++k) poses.push_back(poses.back());  // at rest for 2 s
+  OdometryGuard guard;
+  check_all(guard, poses);
+  EXPECT_EQ(guard.check(kScanPeriod * 12, SE2()).fault, OdometryFault::kJump);  // 20.6 m in 2.2 s
+  EXPECT_EQ(guard.stats().catch_ups, 0u);
+  // The same rest ended by 0.3 m in one step (a freeze that began at rest) is a catch-up.
+  OdometryGuard rested;
+  check_all(rested, poses);
+  EXPECT_EQ(rested.check(kScanPeriod * 12, SE2(20.35, 5.0, 1.0)).fault, OdometryFault::kCatchUp);
+}
+
 // Intel: a scan 1.2 ms after the last one carries its odometry pose; the odometry is slower
 // than the scanner there, not stalled.
 TEST(OdometryGuard, APoseRepeatedWithinTheStallDurationIsNotAStall) {

@@ -96,13 +96,15 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
     EXPECT_EQ(spec.rfind(kind + ":", 0), 0u) << spec;
     EXPECT_EQ(fault_spec(parse_fault(spec)), spec);
   }
-  EXPECT_EQ(fault_kinds().size(), 15u);
+  EXPECT_EQ(fault_kinds().size(), 16u);
+  EXPECT_EQ(fault_spec(parse_fault("odom-reset:every=30")), "odom-reset:every=30,start=30");
 }
 
 TEST(FaultSpec, BadSpecsAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"wobble", "unknown fault kind 'wobble'"},
-      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, wheel-scale, heading-drift, scan-gap,"},
+      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, odom-reset, wheel-scale, heading-drift, scan-gap,"},
+      {"odom-reset:every=0", "every=0 is out of range (0, inf)"},
       {"stall:every=60,lenght=2", "unknown key 'lenght' for stall (keys: every, start, duration)"},
       {"stall:every=abc", "every is not a number: 'abc'"},
       {"stall:every=-5", "every=-5 is out of range (0, inf)"},
@@ -191,6 +193,34 @@ TEST(FaultInjection, OdomGapRemovesOdomLinesAndHoldsTheLaserOdometry) {
   // The lasers are all there, their odometry held as by stall.
   Messages stalled = perturbed("stall:every=20,duration=1.2");
   EXPECT_EQ(laser_odometry(messages), laser_odometry(stalled));
+}
+
+// A restart every 20 s from 20 s: each chain's first pose at or after a restart is the origin,
+// later ones relative to it; the robot's motion between any two poses of one period is kept.
+TEST(FaultInjection, OdomResetRestartsEachChainFromTheOrigin) {
+  Messages messages = office();
+  const FaultReport report = report_of("odom-reset:every=20", messages);
+  EXPECT_EQ(change(report, "restarts"), 7.0);  // at 20, 40, ..., 140 s
+  const std::vector<LaserMessage> before = of_type<LaserMessage>(office());
+  const std::vector<LaserMessage> after = of_type<LaserMessage>(messages);
+  ASSERT_EQ(before.size(), after.size());
+  const auto period = [](double stamp) { return stamp < 20.0 ? -1L : static_cast<long>(std::floor((stamp - 20.0) / 20.0)); };
+  std::size_t origins = 0;
+  for (std::size_t i = 1; i < after.size(); ++i) {
+    const double t = after[i].scan.stamp;
+    if (period(t) < 0) {
+      EXPECT_EQ(after[i].odom_pose, before[i].odom_pose) << t;  // before the first restart: as logged
+    } else if (period(t) != period(after[i - 1].scan.stamp)) {
+      EXPECT_NEAR(after[i].odom_pose.vector().norm(), 0.0, 1e-12) << t;  // the restart's first pose
+      ++origins;
+    } else {
+      const SE2 moved = after[i - 1].odom_pose.between(after[i].odom_pose);
+      const SE2 truth = before[i - 1].odom_pose.between(before[i].odom_pose);
+      EXPECT_NEAR((moved.vector() - truth.vector()).norm(), 0.0, 1e-9) << t;
+    }
+  }
+  EXPECT_EQ(origins, 7u);
+  EXPECT_GT(change(report, "max_restart_jump_m"), 1.0);
 }
 
 TEST(FaultInjection, WheelScaleOfOneChangesNothingBitForBit) {

@@ -83,7 +83,16 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     return OdometryFault::kStall;
   }
   const bool moving = translation > config_.moving_translation || rotation > config_.moving_rotation;
-  if (stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt))) {
+  const bool catch_up = stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt));
+  if (catch_up && exceeds_bounds(increment, stood + dt)) {
+    // More than the robot could have moved since the pose last changed: not a catch-up but a
+    // jump (an odometry that restarted from its origin while the robot stood).
+    stalled_ = false;
+    was_moving_ = false;
+    ++stats_.jumps;
+    return OdometryFault::kJump;
+  }
+  if (catch_up) {
     stalled_ = false;
     was_moving_ = moving;
     ++stats_.catch_ups;

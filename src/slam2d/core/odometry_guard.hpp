@@ -24,7 +24,9 @@
 //    that simply drives off again is trusted. Over a longer step a freeze cannot be told from a
 //    robot that drove off by the increment's size (Intel's scans are up to 2 s apart), so the bound
 //    stops growing there. A method applies a catch-up from its estimate at the scan where the
-//    pose last moved (OdometryCheck::moved), which is right either way.
+//    pose last moved (OdometryCheck::moved), which is right either way. A catch-up larger than
+//    the robot could have moved since the pose last changed (the jump bounds below over that
+//    time) is a jump instead: an odometry that restarted from its origin while the robot stood.
 //  - jump: an increment beyond what the robot could have moved in the time step: more than
 //    max_speed * dt + jump_translation_slack or max_turn_rate * dt + jump_rotation_slack, with dt
 //    at least min_time_step (stamps of real logs jitter and step back, so short or negative steps

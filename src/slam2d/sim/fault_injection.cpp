@@ -132,6 +132,12 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
   static const std::vector<std::pair<std::string, FaultParser>> table = {
       {"stall", [](SpecArguments& a) -> Fault { return StallFault{parse_windows(a)}; }},
       {"odom-gap", [](SpecArguments& a) -> Fault { return OdomGapFault{parse_windows(a)}; }},
+      {"odom-reset", [](SpecArguments& a) -> Fault {
+         OdomResetFault f;
+         f.every = a.number("every", f.every, kPositive);
+         f.start = a.number("start", f.every, {0.0, kInf});
+         return f;
+       }},
       {"wheel-scale", [](SpecArguments& a) -> Fault {
          WheelScaleFault f;
          f.translation = a.number("translation", f.translation, kFactor);
@@ -180,6 +186,7 @@ double as_number(std::size_t k) { return static_cast<double>(k); }
 
 Parameters parameters(const StallFault& f) { return {"stall", window_parameters(f.windows)}; }
 Parameters parameters(const OdomGapFault& f) { return {"odom-gap", window_parameters(f.windows)}; }
+Parameters parameters(const OdomResetFault& f) { return {"odom-reset", {{"every", f.every}, {"start", f.start}}}; }
 Parameters parameters(const WheelScaleFault& f) {
   return {"wheel-scale", {{"translation", f.translation}, {"rotation", f.rotation}}};
 }
@@ -388,6 +395,42 @@ Changes apply(const StallFault& fault, Messages& messages, Rng&) {
 
 Changes apply(const OdomGapFault& fault, Messages& messages, Rng&) {
   return hold_changes(hold_odometry(messages, fault.windows, true), "gaps");
+}
+
+Changes apply(const OdomResetFault& fault, Messages& messages, Rng&) {
+  const double t0 = messages.empty() ? 0.0 : stamp_of(messages.front());
+  // The restart a stamp comes after (-1: before the first).
+  const auto restart = [&](double stamp) {
+    const double since_start = stamp - t0 - fault.start;
+    return since_start >= 0.0 ? static_cast<long>(std::floor(since_start / fault.every)) : -1L;
+  };
+  struct ChainState {
+    long restart = -1;
+    SE2 T_origin_odom;  // the current odometry frame in the logged one's
+  };
+  std::array<ChainState, 2> states;
+  std::set<long> restarts;
+  std::size_t changed = 0;
+  double max_jump_m = 0.0;
+  for (CarmenMessage& message : messages) {
+    const std::optional<Chain> chain = chain_of(message);
+    if (!chain) continue;
+    ChainState& state = states[*chain];
+    const SE2 pose = odometry_pose(message);
+    const long m = restart(stamp_of(message));
+    if (m > state.restart) {  // the first pose after a restart is the new origin
+      if (*chain == kLaserChain) max_jump_m = std::max(max_jump_m, state.T_origin_odom.between(pose).translation().norm());
+      state.restart = m;
+      state.T_origin_odom = pose;
+      restarts.insert(m);
+    }
+    if (state.restart < 0) continue;
+    set_odometry_pose(message, state.T_origin_odom.between(pose));
+    ++changed;
+  }
+  return {{"restarts", static_cast<double>(restarts.size())},
+          {"odometry_poses_changed", static_cast<double>(changed)},
+          {"max_restart_jump_m", max_jump_m}};
 }
 
 Changes apply(const WheelScaleFault& fault, Messages& messages, Rng&) {

@@ -54,6 +54,14 @@ struct StallFault {
 struct OdomGapFault {
   FaultWindows windows;
 };
+/// Odometry restarts (a driver or controller reset): at t0 + start + m every (m = 0, 1, ...) each
+/// chain's odometry starts again from the origin: every later pose is re-expressed in the frame of
+/// the chain's first pose at or after that moment, which becomes (0, 0, 0). One increment per
+/// restart jumps by the inverse of where the odometry had got to; all others are kept.
+struct OdomResetFault {
+  double every = 120.0;  // s between restarts, > 0
+  double start = 120.0;  // s from the log's first stamp to the first restart, >= 0 (parse default: every)
+};
 /// Wheel-scale error: increments scaled, re-integrated (Eq. 1). Factors of exactly 1 change nothing.
 struct WheelScaleFault {
   double translation = 1.05;  // factor on the increments' translation, in (0, 10]
@@ -111,7 +119,7 @@ struct RangeMaxFault {
   double max = 30.0;  // m, > 0 and at most the log's maximum range
 };
 
-using Fault = std::variant<StallFault, OdomGapFault, WheelScaleFault, HeadingDriftFault, ScanGapFault,
+using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, ScanGapFault,
                            DecimateFault, JitterFault, DuplicateFault, BackwardsFault, RangeNoiseFault,
                            SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault>;
 
