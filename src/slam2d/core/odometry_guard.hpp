@@ -88,6 +88,12 @@ struct OdometryGuardConfig {
 /// Throws Error for out-of-range values.
 void validate(const OdometryGuardConfig& config);
 
+/// A method that matches a scan whose increment is not trusted from two starts (its prediction and
+/// a competing one, e.g. the last pose against a catch-up: HectorSlam::untrusted_starts,
+/// RbpfSlam::corrected_odometry) keeps the competing start only when its fit costs less than this
+/// share of the prediction's: the prediction rests on the motion seen, the other on a guess.
+inline constexpr double kCompetingStartAdvantage = 0.8;
+
 enum class OdometryFault : std::uint8_t { kNone, kStall, kCatchUp, kJump };
 
 /// The verdict on one scan's odometry increment.

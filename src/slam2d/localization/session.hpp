@@ -69,6 +69,8 @@ class LocalizationSession {
   const std::vector<bool>& localized() const { return localized_; }
 
  private:
+  SE2 stall_motion(const LaserScan& scan) const;
+
   Localizer& localizer_;
   std::optional<Kidnap> kidnap_;
   LocalizationRunSummary summary_;
@@ -77,8 +79,6 @@ class LocalizationSession {
   LocalizationEstimate last_;
   double first_stamp_ = 0.0;
   OdometryGuard odometry_guard_;
-  SE2 stall_motion(const LaserScan& scan) const;
-
   const LocalizationMap* map_;
   SE2 seen_odom_;  // the odometry the localizer sees (guarded, with the kidnap)
   SE2 seen_at_moved_;  // seen_odom_ at the scan where the wheel odometry last moved

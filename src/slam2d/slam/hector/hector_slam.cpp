@@ -112,7 +112,7 @@ HectorMatchResult HectorSlam::match(const LaserScan& corrected, const HectorInpu
   HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt);
   if (const std::optional<UntrustedStarts> starts = untrusted_starts(); starts && starts->second) {
     HectorMatchResult second = match_from(points, *starts->second, false, std::nullopt);
-    if (second.equations.cost < starts->second_factor * result.equations.cost) result = std::move(second);
+    if (second.equations.cost < kCompetingStartAdvantage * result.equations.cost) result = std::move(second);
   }
   return result;
 }
@@ -152,17 +152,16 @@ double HectorSlam::recovery_residual(bool with_odometry) const {
 //  - jump: the last pose alone. The odometry competed here once, for a motion the bounds did not
 //    foresee; an odometry that restarted from its origin 21.5 m away then won in ACES's look-alike
 //    corridors (graph SLAM 2.42 m with `odom-reset:every=120`, 0.0371 m without it).
-// The second start wins with a fit a fifth better, since the first rests on the motion seen, not
-// on a guess.
+// The second start wins with a fit a fifth better (kCompetingStartAdvantage).
 std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const {
   if (config_.prior != MotionPrior::kOdometry || !last_pose_ || odometry_.trusted()) return std::nullopt;
   switch (odometry_.fault) {
     case OdometryFault::kStall: {
-      if (!odometry_.stall_start || !previous_pose_) return UntrustedStarts{*last_pose_, std::nullopt, 1.0};
-      return UntrustedStarts{*last_pose_ * previous_pose_->between(*last_pose_), *last_pose_, 0.8};
+      if (!odometry_.stall_start || !previous_pose_) return UntrustedStarts{*last_pose_, std::nullopt};
+      return UntrustedStarts{*last_pose_ * previous_pose_->between(*last_pose_), *last_pose_};
     }
-    case OdometryFault::kCatchUp: return UntrustedStarts{last_moved_pose_ * odometry_.increment, *last_pose_, 0.8};
-    case OdometryFault::kJump: return UntrustedStarts{*last_pose_, std::nullopt, 0.8};
+    case OdometryFault::kCatchUp: return UntrustedStarts{last_moved_pose_ * odometry_.increment, *last_pose_};
+    case OdometryFault::kJump: return UntrustedStarts{*last_pose_, std::nullopt};
     case OdometryFault::kNone: break;
   }
   return std::nullopt;

@@ -124,8 +124,7 @@ class HectorSlam {
   HectorMatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
-    std::optional<SE2> second;   // the competing start, if any
-    double second_factor = 1.0;  // the second wins when its cost is below this times the first's
+    std::optional<SE2> second;   // the competing start, if any (kCompetingStartAdvantage)
   };
   HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
                                const std::optional<PosePrior>& prior) const;

@@ -24,7 +24,6 @@ struct RbpfWorkers {
 namespace {
 
 constexpr int kMaxThreads = 256;
-constexpr double kSecondStartAdvantage = 0.8;  // a catch-up's second start wins with this share of the first's cost
 
 bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
 
@@ -191,7 +190,7 @@ bool RbpfSlam::resample_if_needed() {
 // wheel odometry last moved (the catch-up carries the motion since then); else not moved. Then matched
 // against the best particle's map (without the motion prior when the increment was not trusted).
 // At a catch-up the previous scan's pose competes as a second start and wins with a fit a fifth
-// better (Hector's rule, HectorSlam::untrusted_starts): a catch-up over a stall in which the robot
+// better (kCompetingStartAdvantage, as in Hector): a catch-up over a stall in which the robot
 // reversed may carry the reversing wrong (FR079 with a 1.2 s stall every 60 s from +100 s: 0.33 m
 // over three seeds, 0.037 m with the second start).
 SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry) {
@@ -217,7 +216,7 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
       const double sigma = config_.proposal.likelihood_sigma;
       const double cost = -log_observation_likelihood(particle.map.level(0), points, matched.value_or(predicted), sigma);
       const double alternative_cost = -log_observation_likelihood(particle.map.level(0), points, alternative, sigma);
-      if (alternative_cost < kSecondStartAdvantage * cost) matched = alternative;
+      if (alternative_cost < kCompetingStartAdvantage * cost) matched = alternative;
     }
     if (matched) corrected = last_corrected_odometry_ * previous.between(*matched);
   }
