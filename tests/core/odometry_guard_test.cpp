@@ -98,6 +98,28 @@ TEST(OdometryGuard, ARestartAfterARestIsAJumpNotACatchUp) {
   EXPECT_EQ(rested.check(kScanPeriod * 12, SE2(20.35, 5.0, 1.0)).fault, OdometryFault::kCatchUp);
 }
 
+// A restart onto the origin within the bounds: after a 2 s gap the step from 1.1 m back to
+// (0, 0, 0) is less than the robot could have driven, yet it is a jump; the increments after it
+// are trusted again. A step that only passes near the origin is motion.
+TEST(OdometryGuard, AStepOntoTheOriginIsARestartWhateverItsSize) {
+  OdometryGuard guard;
+  guard.check(0.0, SE2(1.0, 0.0, 0.2));
+  guard.check(0.1, SE2(1.05, 0.0, 0.2));
+  const OdometryCheck restart = guard.check(2.1, SE2());  // 1.05 m and 0.2 rad in 2 s: within the bounds
+  EXPECT_EQ(restart.fault, OdometryFault::kJump);
+  EXPECT_TRUE(guard.check(2.2, SE2(0.05, 0.0, 0.0)).trusted());
+  EXPECT_EQ(guard.stats().jumps, 1u);
+
+  OdometryGuard passing;
+  passing.check(0.0, SE2(-0.05, 0.0, 0.0));
+  EXPECT_TRUE(passing.check(0.1, SE2(0.0, 0.0, 0.01)).trusted());  // 10 mrad off the origin's heading
+  EXPECT_TRUE(passing.check(0.2, SE2(0.05, 0.0, 0.01)).trusted());
+  // A log that starts at the origin and stands there is at rest, not restarting.
+  OdometryGuard resting;
+  for (int k = 0; k < 5; ++k) EXPECT_TRUE(resting.check(0.1 * k, SE2()).trusted());
+  EXPECT_EQ(resting.stats().jumps, 0u);
+}
+
 // Intel: a scan 1.2 ms after the last one carries its odometry pose; the odometry is slower
 // than the scanner there, not stalled.
 TEST(OdometryGuard, APoseRepeatedWithinTheStallDurationIsNotAStall) {
@@ -197,6 +219,7 @@ TEST(OdometryGuard, RejectsInvalidConfigs) {
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.min_time_step = -1.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.jump_rotation_slack = -0.1}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_held_stall = -1.0}), Error);
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.restart_translation = -1e-3}), Error);
 }
 
 }  // namespace

@@ -25,6 +25,8 @@ void validate(const OdometryGuardConfig& config) {
         "OdometryGuardConfig: jump slacks must be finite and >= 0");
   check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
   check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
+  check(non_negative(config.restart_translation) && non_negative(config.restart_rotation),
+        "OdometryGuardConfig: restart_translation and restart_rotation must be finite and >= 0");
   check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
   check(non_negative(config.max_held_stall), "OdometryGuardConfig: max_held_stall must be finite and >= 0");
   check(positive(config.startup_acceleration) && positive(config.startup_angular_acceleration),
@@ -47,7 +49,8 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     const std::size_t stalls = stats_.stalls;
     // How long the pose had stood still: up to this scan if it is still frozen, else up to the last.
     const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
-    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood);
+    const bool restarted = at_origin(T_odom_robot) && !at_origin(*last_pose_);
+    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood, restarted);
     result.stall_start = stats_.stalls > stalls;
     result.hold_map = result.fault == OdometryFault::kStall && stood <= config_.max_held_stall;
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
@@ -69,8 +72,9 @@ bool OdometryGuard::is_frozen(const SE2& increment) const {
 
 // The state machine of the header: stall (frozen after motion) until the pose moves; a catch-up
 // when it moves after a stall, or after a rest of stall_duration or more by more than a robot
-// driving off could (it may have moved unseen); otherwise a jump when the increment is out of bounds.
-OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood) {
+// driving off could (it may have moved unseen); a jump when it restarted onto the origin or is
+// out of bounds.
+OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood, bool restarted) {
   const double translation = increment.translation().norm();
   const double rotation = std::abs(increment.theta());
   if (is_frozen(increment)) {
@@ -84,9 +88,9 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
   }
   const bool moving = translation > config_.moving_translation || rotation > config_.moving_rotation;
   const bool catch_up = stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt));
-  if (catch_up && exceeds_bounds(increment, stood + dt)) {
-    // More than the robot could have moved since the pose last changed: not a catch-up but a
-    // jump (an odometry that restarted from its origin while the robot stood).
+  if (restarted || (catch_up && exceeds_bounds(increment, stood + dt))) {
+    // Onto the origin itself, or more than the robot could have moved since the pose last
+    // changed: not motion or a catch-up but a jump (an odometry that restarted from its origin).
     stalled_ = false;
     was_moving_ = false;
     ++stats_.jumps;
@@ -104,6 +108,11 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
   }
   was_moving_ = moving;
   return OdometryFault::kNone;
+}
+
+bool OdometryGuard::at_origin(const SE2& T_odom_robot) const {
+  return T_odom_robot.translation().norm() <= config_.restart_translation &&
+         std::abs(T_odom_robot.theta()) <= config_.restart_rotation;
 }
 
 bool OdometryGuard::exceeds_startup(const SE2& increment, double dt) const {

@@ -39,6 +39,13 @@
 //    held scans and wait for the catch-up (the RBPF does not: one update over a long stall loses
 //    its particles on FR079; docs/odometry_guard.md, "Long stalls"). An odometry frozen for
 //    longer is taken as lost, and the maps follow the scan matching again (as without odometry).
+//  - restart: a step onto the odometry origin itself (to `restart_translation` and
+//    `restart_rotation`, 1 mm and 1 mrad) from a pose that was not there is a jump whatever its
+//    size. A driver or controller that restarts begins again at (0, 0, 0); after a gap of
+//    seconds, or near where its last chain began, that step is within the bounds above and
+//    would be taken for motion (Intel's restart after a 2.1 s gap: 3.1 m and 2.1 rad, every SLAM
+//    method 1.17-1.19 m). A robot that drives back onto its odometry origin to a millimetre and a
+//    milliradian loses one increment's prior, no more.
 //  - gap: consecutive scans more than `gap` seconds apart (reported; the increment over a gap is
 //    checked like any other, against the longer dt). The odometry pose of the first scan after a
 //    gap may lag (ACES: the robot turns 1.4 rad during a 3 s gap, the scan after it shows 0.39 rad
@@ -80,6 +87,10 @@ struct OdometryGuardConfig {
   double startup_angular_acceleration = 4.0;  // rad/s^2, > 0
   double max_startup_time = 0.25;             // s, >= min_time_step: the startup bound's longest dt
   double gap = 1.0;                     // s, > 0: scans further apart are a gap
+  // m and rad, >= 0: a step onto the odometry origin (0, 0, 0) to within these, from a pose that
+  // was not there, is a restart (a jump) whatever its size.
+  double restart_translation = 1e-3;
+  double restart_rotation = 1e-3;
   // s, >= 0: a stall this young is waited out (OdometryCheck::hold_map); 0 holds nothing. 30 s of
   // driving is about what a catch-up's odometry still brings within the matchers' reach.
   double max_held_stall = 30.0;
@@ -130,7 +141,8 @@ class OdometryGuard {
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
-  OdometryFault classify(const SE2& increment, double dt, double stood);
+  OdometryFault classify(const SE2& increment, double dt, double stood, bool restarted);
+  bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool exceeds_startup(const SE2& increment, double dt) const;
   bool exceeds_bounds(const SE2& increment, double dt) const;
