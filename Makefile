@@ -10,7 +10,7 @@ DEMO_OUT ?= out/demo
 SLAM2D_DATA ?= $(abspath $(wildcard ../shared/data))
 export SLAM2D_DATA
 
-.PHONY: all deps configure build test demo bench clean
+.PHONY: all deps configure build test demo bench install clean
 
 all: build
 
@@ -26,11 +26,18 @@ build: configure
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j$(JOBS)
 
-demo: build
+# The demo needs the tool alone, not the tests and benchmarks.
+demo: configure
+	@cmake --build $(BUILD_DIR) -j$(JOBS) --target slam2d
 	@$(BUILD_DIR)/bin/slam2d demo --out $(DEMO_OUT)
 
 bench: build
 	@$(BUILD_DIR)/bin/slam2d_bench
+
+# The library, headers, CMake package and tool into PREFIX (examples/consumer shows the use).
+PREFIX ?= /usr/local
+install: build
+	@cmake --install $(BUILD_DIR) --prefix $(PREFIX)
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -24,9 +24,14 @@ function(slam2d_add_module name)
   endif()
   add_library(slam2d_${name} STATIC ${sources})
   add_library(slam2d::${name} ALIAS slam2d_${name})
-  target_include_directories(slam2d_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  # Installed and exported as slam2d::<NAME> too (src/slam2d/CMakeLists.txt), headers under
+  # <prefix>/include/slam2d/<NAME>/.
+  set_target_properties(slam2d_${name} PROPERTIES EXPORT_NAME ${name})
+  target_include_directories(slam2d_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+                                                   $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(slam2d_${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   slam2d_set_warnings(slam2d_${name})
+  set_property(GLOBAL APPEND PROPERTY SLAM2D_MODULES slam2d_${name})
 endfunction()
 
 # slam2d_add_test(NAME DEPS <libs>)
