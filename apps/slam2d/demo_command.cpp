@@ -11,6 +11,8 @@
 #include "json.hpp"
 #include "map_job.hpp"
 #include "slam2d/io/atomic_file.hpp"
+#include "slam2d/io/carmen_log.hpp"
+#include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/sim/simulator.hpp"
 
 namespace slam2d::cli {
@@ -31,7 +33,8 @@ void run_demo(const DemoOptions& options) {
   const std::string log = (dir / "office.clf").string();
   const std::string truth_path = (dir / "truth.txt").string();
   const SimulatedRun run = simulate(options.config);
-  write_run(run, log, truth_path);
+  write_carmen_log(log, run_comments(run.config), run.messages);
+  write_trajectory(truth_path, run.truth);
 
   MapJobOptions map_options;
   map_options.log = log;

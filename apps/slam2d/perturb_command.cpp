@@ -37,9 +37,9 @@ struct MessageCounts {
   std::size_t true_pose = 0;
 };
 
-MessageCounts count_messages(const std::vector<CarmenMessage>& messages) {
+MessageCounts count_messages(const std::vector<SensorMessage>& messages) {
   MessageCounts counts;
-  for (const CarmenMessage& message : messages) {
+  for (const SensorMessage& message : messages) {
     if (std::holds_alternative<LaserMessage>(message)) ++counts.laser;
     if (std::holds_alternative<OdometryMessage>(message)) ++counts.odometry;
     if (std::holds_alternative<TruePoseMessage>(message)) ++counts.true_pose;
@@ -47,11 +47,11 @@ MessageCounts count_messages(const std::vector<CarmenMessage>& messages) {
   return counts;
 }
 
-std::vector<CarmenMessage> read_log(const std::string& path, Progress& progress) {
+std::vector<SensorMessage> read_log(const std::string& path, Progress& progress) {
   CarmenReaderOptions as_logged;
   as_logged.repair_reverse_odometry = false;  // faults are injected into the log as it is
   CarmenReader reader(path, as_logged);
-  std::vector<CarmenMessage> messages;
+  std::vector<SensorMessage> messages;
   while (auto message = reader.next()) {
     messages.push_back(std::move(*message));
     if (messages.size() % 4096 == 0) progress.update(reader.progress(), fmt::format("{} messages read", messages.size()));
@@ -69,7 +69,7 @@ void run_perturb(const PerturbOptions& options) {
   std::vector<Fault> faults;
   for (const std::string& spec : options.faults) faults.push_back(parse_fault(spec));  // bad specs stop here
   Progress progress("perturb", options.quiet);
-  std::vector<CarmenMessage> messages = read_log(options.log, progress);
+  std::vector<SensorMessage> messages = read_log(options.log, progress);
   const MessageCounts before = count_messages(messages);
   progress.update(-1.0, "injecting faults");
   const std::vector<FaultReport> reports = apply_faults(faults, messages, options.seed);

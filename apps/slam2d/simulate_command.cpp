@@ -4,6 +4,8 @@
 
 #include "commands.hpp"
 #include "json.hpp"
+#include "slam2d/io/carmen_log.hpp"
+#include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/sim/simulator.hpp"
 
 namespace slam2d::cli {
@@ -20,7 +22,8 @@ struct SimulateOptions {
 
 void run_simulate(const SimulateOptions& options) {
   const SimulatedRun run = simulate(options.config);
-  write_run(run, options.out, options.truth);
+  write_carmen_log(options.out, run_comments(run.config), run.messages);
+  if (!options.truth.empty()) write_trajectory(options.truth, run.truth);
   JsonObject json;
   json.add("log", options.out).add("truth", options.truth).add("world", options.config.world);
   json.add("seed", static_cast<std::size_t>(options.config.seed)).add("duration_s", options.config.duration);

@@ -28,7 +28,7 @@ const SimulatedRun& office_run() {
 
 std::vector<const LaserMessage*> lasers() {
   std::vector<const LaserMessage*> out;
-  for (const CarmenMessage& m : office_run().messages) {
+  for (const SensorMessage& m : office_run().messages) {
     if (const auto* laser = std::get_if<LaserMessage>(&m)) out.push_back(laser);
   }
   return out;

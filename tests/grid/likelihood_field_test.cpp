@@ -259,7 +259,7 @@ TEST(LikelihoodFieldRealData, IntelCorrectedScansScoreBestAtTheirPoses) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   std::vector<std::pair<LaserScan, SE2>> scans;  // T_map_robot = T_map_laser * T_robot_laser^-1
   CarmenReader reader((data / "intel" / "intel-corrected.log.gz").string());
-  while (const std::optional<CarmenMessage> message = reader.next()) {
+  while (const std::optional<SensorMessage> message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser != nullptr && laser->has_poses) {
       scans.emplace_back(laser->scan, laser->laser_pose * laser->scan.T_robot_sensor.inverse());

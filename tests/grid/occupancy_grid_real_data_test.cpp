@@ -26,7 +26,7 @@ struct PosedScan {
 std::vector<PosedScan> read_corrected_log(const std::filesystem::path& path) {
   std::vector<PosedScan> scans;
   CarmenReader reader(path.string());
-  while (const std::optional<CarmenMessage> message = reader.next()) {
+  while (const std::optional<SensorMessage> message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || !laser->has_poses) continue;
     // The FLASER "x y theta" triple is the laser's pose: T_map_robot = T_map_laser * T_robot_laser^-1.

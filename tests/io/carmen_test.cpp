@@ -31,7 +31,7 @@ constexpr double kPi = std::numbers::pi;
 std::string carmen_fixture(const std::string& name) { return fixture_path("carmen/" + name); }
 
 struct ReadResult {
-  std::vector<CarmenMessage> messages;
+  std::vector<SensorMessage> messages;
   CarmenStats stats;
 };
 
@@ -47,8 +47,8 @@ const LaserMessage& laser(const ReadResult& result, std::size_t i) {
   return std::get<LaserMessage>(result.messages.at(i));
 }
 
-void write_messages(CarmenWriter& writer, const std::vector<CarmenMessage>& messages) {
-  for (const CarmenMessage& message : messages) {
+void write_messages(CarmenWriter& writer, const std::vector<SensorMessage>& messages) {
+  for (const SensorMessage& message : messages) {
     std::visit([&writer](const auto& m) { writer.write(m); }, message);
   }
 }
@@ -698,7 +698,7 @@ TEST(CarmenReader, MutatedLinesGiveParseErrorsOrCleanMessages) {
     for (std::size_t i = 1; i < tokens.size(); ++i) line += " " + tokens[i];
     std::ofstream(path) << line << "\n";
     try {
-      for (const CarmenMessage& message : read_log(path).messages) {
+      for (const SensorMessage& message : read_log(path).messages) {
         if (const auto* laser = std::get_if<LaserMessage>(&message)) {
           for (double r : laser->scan.ranges) EXPECT_TRUE(std::isfinite(r) && r >= 0.0) << line;
           EXPECT_TRUE(std::isfinite(laser->scan.stamp)) << line;
@@ -716,7 +716,7 @@ TEST(CarmenReader, MutatedLinesGiveParseErrorsOrCleanMessages) {
 // ------------------------------------------------------------------------------------------------
 // Writer.
 
-void expect_same_message(const CarmenMessage& a, const CarmenMessage& b) {
+void expect_same_message(const SensorMessage& a, const SensorMessage& b) {
   ASSERT_EQ(a.index(), b.index());
   if (const auto* x = std::get_if<LaserMessage>(&a)) {
     const auto& y = std::get<LaserMessage>(b);
@@ -780,7 +780,7 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, CarmenRoundTrip,
                                            "rawlaser.log", "short_tail.log", "unknown_types.log", "backwards.log"));
 
 // Awkward doubles: every one must come back bit for bit.
-std::vector<CarmenMessage> awkward_messages() {
+std::vector<SensorMessage> awkward_messages() {
   LaserMessage front;
   front.type = "FLASER";
   front.scan.stamp = 976052857.337284;
@@ -814,7 +814,7 @@ std::vector<CarmenMessage> awkward_messages() {
 }
 
 TEST(CarmenWriter, AwkwardNumbersRoundTripExactlyPlainAndGzip) {
-  std::vector<CarmenMessage> messages = awkward_messages();
+  std::vector<SensorMessage> messages = awkward_messages();
   test::TempDir dir;
   for (const std::string name : {"awkward.clf", "awkward.clf.gz"}) {
     SCOPED_TRACE(name);

@@ -94,7 +94,7 @@ TEST(CarmenRealData, RawLogsReadWithTheReadmeCounts) {
 TEST(CarmenRealData, FirstIntelScanHasTheCarmenGeometry) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   CarmenReader reader((data / "intel/intel.clf.gz").string());
-  std::optional<CarmenMessage> message;
+  std::optional<SensorMessage> message;
   while ((message = reader.next()) && !std::holds_alternative<LaserMessage>(*message)) {
   }
   ASSERT_TRUE(message);
@@ -161,7 +161,7 @@ TEST(CarmenRealData, CorrectedLogParamsSetTheGeometry) {
   // Freiburg 101: PARAM robot_front_laser_max 80.99, robot_frontlaser_offset -0.04,
   // laser_front_laser_resolution 0.5 (deg); 360 beams.
   CarmenReader reader((data / "carmen-corrected/freiburg-101-corrected.log.gz").string());
-  std::optional<CarmenMessage> message;
+  std::optional<SensorMessage> message;
   while ((message = reader.next()) && !std::holds_alternative<LaserMessage>(*message)) {
   }
   ASSERT_TRUE(message);

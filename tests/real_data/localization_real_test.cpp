@@ -150,7 +150,7 @@ TEST(LocalizationRealData, MclDoesNotDecideOnASpotTurnWithSpuriousReadings) {
   const std::string log = (data / "intel" / "intel.clf.gz").string();
   const Trajectory reference = intel_from_known_start(map, log, 1500);
   // As `slam2d perturb LOG --out L --fault spurious-short:p=0.05 --seed 1` writes it.
-  std::vector<CarmenMessage> messages;
+  std::vector<SensorMessage> messages;
   CarmenReaderOptions as_logged;
   as_logged.repair_reverse_odometry = false;
   CarmenReader reader(log, as_logged);
@@ -185,14 +185,14 @@ TEST(LocalizationRealData, MclDoesNotDecideOnASpotTurnWithSpuriousReadings) {
 TEST(LocalizationRealData, EkfAndMclFollowTheRobotThroughOdometryStalls) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const LocalizationMap& map = intel_map(data);
-  std::vector<CarmenMessage> messages;
+  std::vector<SensorMessage> messages;
   CarmenReader reader((data / "intel" / "intel.clf.gz").string());
   while (auto message = reader.next()) messages.push_back(std::move(*message));
   apply_faults({parse_fault("stall:every=60,duration=3")}, messages, 1);
   const std::vector<Relation> relations = read_relations((data / "intel" / "intel.relations").string());
   const auto run = [&](Localizer& localizer, const LocalizationMap* stall_map) {
     LocalizationSession session(localizer, std::nullopt, {}, stall_map);
-    for (const CarmenMessage& message : messages) {
+    for (const SensorMessage& message : messages) {
       const auto* laser = std::get_if<LaserMessage>(&message);
       if (laser != nullptr && laser->type != "RLASER") session.add(laser->odom_pose, laser->scan);
     }

@@ -40,16 +40,16 @@ struct StalledLog {
 
 void PrintTo(const StalledLog& log, std::ostream* os) { *os << log.name; }
 
-std::vector<CarmenMessage> read_messages(const std::filesystem::path& log, const CarmenReaderOptions& options = {}) {
-  std::vector<CarmenMessage> messages;
+std::vector<SensorMessage> read_messages(const std::filesystem::path& log, const CarmenReaderOptions& options = {}) {
+  std::vector<SensorMessage> messages;
   CarmenReader reader(log.string(), options);
   while (auto message = reader.next()) messages.push_back(std::move(*message));
   return messages;
 }
 
-std::vector<LaserMessage> laser_messages(std::vector<CarmenMessage>& messages) {
+std::vector<LaserMessage> laser_messages(std::vector<SensorMessage>& messages) {
   std::vector<LaserMessage> scans;
-  for (CarmenMessage& message : messages) {
+  for (SensorMessage& message : messages) {
     if (auto* laser = std::get_if<LaserMessage>(&message)) scans.push_back(std::move(*laser));
   }
   return scans;
@@ -57,7 +57,7 @@ std::vector<LaserMessage> laser_messages(std::vector<CarmenMessage>& messages) {
 
 // The log's laser messages after the fault (a stall unless said).
 std::vector<LaserMessage> stalled_scans(const std::filesystem::path& log, const std::string& fault = kStall) {
-  std::vector<CarmenMessage> messages = read_messages(log);
+  std::vector<SensorMessage> messages = read_messages(log);
   apply_faults({parse_fault(fault)}, messages, 1);
   return laser_messages(messages);
 }
@@ -207,9 +207,9 @@ TEST(OdometryStallRealData, HectorOnAcesStaysUnderFifteenCentimetresInEachOfThre
 TEST(HectorOdometryPriorRealData, IntelStaysAtItsCleanErrorUnderSmallRangeNoise) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());
-  const std::vector<CarmenMessage> clean = read_messages(data / "intel/intel.clf.gz");
+  const std::vector<SensorMessage> clean = read_messages(data / "intel/intel.clf.gz");
   for (const std::uint64_t seed : {1u, 2u, 3u}) {
-    std::vector<CarmenMessage> messages = clean;
+    std::vector<SensorMessage> messages = clean;
     apply_faults({parse_fault("range-noise:sigma=0.01")}, messages, seed);
     HectorSlam slam;
     for (const LaserMessage& laser : laser_messages(messages)) {
@@ -225,7 +225,7 @@ TEST(HectorOdometryPriorRealData, GivesWayToFr079sReversingOdometryReadAsLogged)
   SLAM2D_REQUIRE_REAL_DATA(data);
   CarmenReaderOptions raw;
   raw.repair_reverse_odometry = false;
-  std::vector<CarmenMessage> messages = read_messages(data / "fr079/fr079.clf.gz", raw);
+  std::vector<SensorMessage> messages = read_messages(data / "fr079/fr079.clf.gz", raw);
   const std::vector<LaserMessage> scans = laser_messages(messages);
   const std::vector<Relation> relations = read_relations((data / "fr079/fr079.relations").string());
   for (const bool robust : {true, false}) {
@@ -248,12 +248,12 @@ std::vector<LaserMessage> perturbed_scans(const std::filesystem::path& log, cons
                                           const CarmenReaderOptions& read_options) {
   CarmenReaderOptions as_logged;
   as_logged.repair_reverse_odometry = false;
-  std::vector<CarmenMessage> messages = read_messages(log, as_logged);
+  std::vector<SensorMessage> messages = read_messages(log, as_logged);
   apply_faults({parse_fault(fault)}, messages, 1);
   const test::TempDir dir;
   const std::filesystem::path perturbed = dir.path() / "perturbed.clf";
   write_carmen_log(perturbed.string(), {}, messages);
-  std::vector<CarmenMessage> read_back = read_messages(perturbed, read_options);
+  std::vector<SensorMessage> read_back = read_messages(perturbed, read_options);
   return laser_messages(read_back);
 }
 

@@ -172,7 +172,7 @@ TEST(ScanOdometry, PlIcpOnASimulatedRunTracksTheTruthBetterThanOdometry) {
     ScanOdometry odometry([](const PointCloud2& target, const PointCloud2& source,
                              const SE2& guess) { return match_pl_icp(target, source, guess); });
     std::vector<SE2> estimate, wheel;
-    for (const CarmenMessage& message : run.messages) {
+    for (const SensorMessage& message : run.messages) {
       const auto* laser = std::get_if<LaserMessage>(&message);
       if (laser == nullptr) continue;
       estimate.push_back(use_odometry ? odometry.add(laser->scan, laser->odom_pose)

@@ -25,7 +25,7 @@
 namespace slam2d {
 namespace {
 
-using Messages = std::vector<CarmenMessage>;
+using Messages = std::vector<SensorMessage>;
 constexpr double kPi = std::numbers::pi;
 
 // 150 s of the office: ODOM at 20 Hz, FLASER + TRUEPOS at 10 Hz, stamps from 0.
@@ -51,7 +51,7 @@ double change(const FaultReport& report, const std::string& key) {
 template <typename T>
 std::vector<T> of_type(const Messages& messages) {
   std::vector<T> result;
-  for (const CarmenMessage& m : messages) {
+  for (const SensorMessage& m : messages) {
     if (const T* typed = std::get_if<T>(&m)) result.push_back(*typed);
   }
   return result;

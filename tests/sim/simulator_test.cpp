@@ -14,6 +14,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
+#include "slam2d/io/carmen_log.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "support/test_support.hpp"
@@ -33,13 +34,13 @@ const SimulatedRun& default_run() {
 template <typename T>
 std::vector<T> messages_of(const SimulatedRun& run) {
   std::vector<T> result;
-  for (const CarmenMessage& m : run.messages) {
+  for (const SensorMessage& m : run.messages) {
     if (const T* typed = std::get_if<T>(&m)) result.push_back(*typed);
   }
   return result;
 }
 
-double stamp_of(const CarmenMessage& m) {
+double stamp_of(const SensorMessage& m) {
   return std::visit(
       [](const auto& typed) -> double {
         using T = std::decay_t<decltype(typed)>;
@@ -52,7 +53,7 @@ double stamp_of(const CarmenMessage& m) {
 
 bool same_pose(const SE2& a, const SE2& b) { return a.vector() == b.vector(); }
 
-bool same_message(const CarmenMessage& a, const CarmenMessage& b) {
+bool same_message(const SensorMessage& a, const SensorMessage& b) {
   if (a.index() != b.index()) return false;
   if (const auto* la = std::get_if<LaserMessage>(&a)) {
     const auto& lb = std::get<LaserMessage>(b);
@@ -157,7 +158,7 @@ TEST(Simulator, LaserSettingsDoNotChangeTheOdometry) {
   const auto oa = messages_of<OdometryMessage>(a), ob = messages_of<OdometryMessage>(b);
   ASSERT_EQ(oa.size(), ob.size());
   for (std::size_t i = 0; i < oa.size(); ++i) {
-    ASSERT_TRUE(same_message(CarmenMessage(oa[i]), CarmenMessage(ob[i]))) << i;
+    ASSERT_TRUE(same_message(SensorMessage(oa[i]), SensorMessage(ob[i]))) << i;
   }
   EXPECT_EQ(messages_of<LaserMessage>(b).size(), 421u);  // 0 .. 60 s at 7 Hz
 }
@@ -374,7 +375,7 @@ TEST(Simulator, RunsInAGivenWorld) {
 
 void expect_log_reads_back(const SimulatedRun& run, const std::string& path) {
   CarmenReader reader(path);
-  std::vector<CarmenMessage> read;
+  std::vector<SensorMessage> read;
   while (auto message = reader.next()) read.push_back(std::move(*message));
   const CarmenStats& stats = reader.stats();
   EXPECT_EQ(stats.param_messages, 6u);
@@ -401,16 +402,17 @@ TEST(Simulator, WrittenLogReadsBack) {
   config.laser.T_robot_sensor = SE2(0.15, 0.0, -0.05);
   const SimulatedRun run = simulate(config);
   test::TempDir dir;
-  write_run(run, dir.file("sim.log.gz"), dir.file("truth.txt"));
+  write_carmen_log(dir.file("sim.log.gz"), run_comments(run.config), run.messages);
+  write_trajectory(dir.file("truth.txt"), run.truth);
   expect_log_reads_back(run, dir.file("sim.log.gz"));
   const Trajectory truth = read_trajectory(dir.file("truth.txt"));
   EXPECT_TRUE(same_truth(truth, run.truth));
   // Plain text, without a truth file.
-  write_run(run, dir.file("sim.clf"), "");
+  write_carmen_log(dir.file("sim.clf"), run_comments(run.config), run.messages);
   expect_log_reads_back(run, dir.file("sim.clf"));
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator{}), 3);
   // An unwritable place is an Error and leaves nothing behind.
-  EXPECT_THROW(write_run(run, dir.file("missing/sim.log"), ""), Error);
+  EXPECT_THROW(write_carmen_log(dir.file("missing/sim.log"), run_comments(run.config), run.messages), Error);
 }
 
 }  // namespace

@@ -14,7 +14,7 @@
 
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/eval/statistics.hpp"
-#include "slam2d/io/relations.hpp"
+#include "slam2d/core/relation.hpp"
 
 namespace slam2d {
 

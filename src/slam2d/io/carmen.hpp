@@ -44,32 +44,9 @@
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/odometry.hpp"
 #include "slam2d/core/se2.hpp"
+#include "slam2d/core/sensor_log.hpp"
 
 namespace slam2d {
-
-struct LaserMessage {
-  std::string type;   // "FLASER", "RLASER", "ROBOTLASER1", "RAWLASER1" .. "RAWLASER4"
-  LaserScan scan;     // stamp = ipc timestamp, angles, ranges, T_robot_sensor
-  double field_of_view = 0.0;  // rad, as declared by the log or the convention above
-  SE2 laser_pose;     // the "x y theta" triple (estimated pose; raw logs repeat odometry)
-  SE2 odom_pose;      // the robot's odometry pose at the scan (T_odom_robot); absent in RAWLASER
-  bool has_poses = true;  // false for RAWLASER, which carries no pose
-  std::size_t line = 0;   // 1-based line in the file
-};
-
-struct TruePoseMessage {
-  double stamp = 0.0;  // s
-  SE2 true_pose;
-  SE2 odom_pose;
-  std::size_t line = 0;
-};
-
-struct OdometryMessage {
-  OdometryReading reading;
-  std::size_t line = 0;
-};
-
-using CarmenMessage = std::variant<LaserMessage, OdometryMessage, TruePoseMessage>;
 
 struct CarmenReaderOptions {
   /// Overrides for FLASER/RLASER geometry (rad); PARAM lines and the convention are used when
@@ -157,7 +134,7 @@ class CarmenReader {
   /// on a malformed line: wrong field count, a non-number, NaN/inf/negative ranges,
   /// non-finite poses or timestamps; and at a PARAM line whose geometry contradicts the beam
   /// count, the other PARAM lines and the convention in every unit (thrown at the first laser line).
-  std::optional<CarmenMessage> next();
+  std::optional<SensorMessage> next();
   /// Counts so far (complete once next() has returned nullopt).
   const CarmenStats& stats() const;
   /// Fraction of the file read so far, in [0, 1] (for progress display; gzip files use the

@@ -63,11 +63,11 @@ void write_old_laser_params(CarmenWriter& writer, const DeclaredLaserGeometry& g
 }
 
 void write_carmen_log(const std::string& path, const std::vector<std::string>& comments,
-                      const std::vector<CarmenMessage>& messages) {
+                      const std::vector<SensorMessage>& messages) {
   CarmenWriter writer(path);
   for (const std::string& comment : comments) writer.write_comment(comment);
   std::optional<DeclaredLaserGeometry> declared[2];  // front, rear
-  for (const CarmenMessage& message : messages) {
+  for (const SensorMessage& message : messages) {
     if (const auto* laser = std::get_if<LaserMessage>(&message)) {
       const bool rear = laser->type == "RLASER";
       if (rear || laser->type == "FLASER") {

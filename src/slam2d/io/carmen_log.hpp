@@ -39,6 +39,6 @@ void write_old_laser_params(CarmenWriter& writer, const DeclaredLaserGeometry& g
 /// Throws Error on a message CarmenWriter refuses or whose geometry cannot be declared; then
 /// nothing is written at `path`.
 void write_carmen_log(const std::string& path, const std::vector<std::string>& comments,
-                      const std::vector<CarmenMessage>& messages);
+                      const std::vector<SensorMessage>& messages);
 
 }  // namespace slam2d

@@ -541,7 +541,7 @@ struct CarmenReader::Impl {
     validate_options(options);
   }
 
-  std::optional<CarmenMessage> parse_line(const Fields& fields);
+  std::optional<SensorMessage> parse_line(const Fields& fields);
   void parse_param(const Fields& fields);
   LaserMessage parse_old_laser(const Fields& fields, bool rear);
   void set_old_laser_geometry(LaserMessage& message, std::size_t n, bool rear);
@@ -565,7 +565,7 @@ struct CarmenReader::Impl {
   double bytes_read = 0.0;  // uncompressed bytes of the lines read so far
 };
 
-std::optional<CarmenMessage> CarmenReader::Impl::parse_line(const Fields& fields) {
+std::optional<SensorMessage> CarmenReader::Impl::parse_line(const Fields& fields) {
   const std::string_view type = fields.type();
   if (type == "FLASER" || type == "RLASER") return parse_old_laser(fields, type == "RLASER");
   if (type == "ROBOTLASER1") return parse_new_laser(fields, true);
@@ -773,7 +773,7 @@ CarmenReader::~CarmenReader() = default;
 CarmenReader::CarmenReader(CarmenReader&&) noexcept = default;
 CarmenReader& CarmenReader::operator=(CarmenReader&&) noexcept = default;
 
-std::optional<CarmenMessage> CarmenReader::next() {
+std::optional<SensorMessage> CarmenReader::next() {
   if (!impl_) throw Error("CarmenReader: used after move");
   Impl& s = *impl_;
   while (s.reader.next(s.line)) {
@@ -784,7 +784,7 @@ std::optional<CarmenMessage> CarmenReader::next() {
       ++s.stats.comment_lines;
       continue;
     }
-    std::optional<CarmenMessage> message = s.parse_line(Fields(s.reader, s.tokens));
+    std::optional<SensorMessage> message = s.parse_line(Fields(s.reader, s.tokens));
     if (!message) continue;
     if (auto* laser = std::get_if<LaserMessage>(&*message)) {
       ++s.stats.laser_messages;

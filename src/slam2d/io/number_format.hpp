@@ -1,29 +1,18 @@
 #pragma once
-// Numbers in text files: written in the shortest form that reads back to the same double
-// (std::to_chars), and read strictly (std::from_chars): a token must be a number and nothing else.
-// Also the small helpers every line-based reader needs (fields, comments, named-field parsing
-// that fails with ParseError "PATH:LINE: message").
+// Numbers in text files: format_number and the strict parse_double / parse_int of
+// core/number_text.hpp (included here), and the small helpers every line-based reader needs
+// (fields, comments, named-field parsing that fails with ParseError "PATH:LINE: message").
 
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "slam2d/core/number_text.hpp"
+
 namespace slam2d {
 
 class LineReader;
-
-/// Shortest exact decimal form of `value` ("0.1", "1e+300", "-0"; "nan"/"inf" if not finite).
-std::string format_number(double value);
-/// Appends format_number(value) to `out` without a temporary string.
-void append_number(std::string& out, double value);
-
-/// The double spelled by the whole of `token`, or nullopt when it is not a number or has trailing
-/// characters. Accepts one leading '+'. "nan" and "inf" parse (the caller decides whether they are
-/// allowed); overflow gives +-inf, underflow the nearest subnormal or zero.
-std::optional<double> parse_double(std::string_view token);
-/// The int spelled by the whole of `token` (decimal, optional '-' or '+'), else nullopt.
-std::optional<int> parse_int(std::string_view token);
 
 /// Splits `line` at white space (space, tab, CR, VT, FF), dropping empty fields. The views point into `line`.
 std::vector<std::string_view> split_fields(std::string_view line);

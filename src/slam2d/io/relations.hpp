@@ -3,20 +3,12 @@
 // one relation per line, "t1 t2 x y z roll pitch yaw" (s, m, rad): the pose of the robot at t2
 // in the frame of the robot at t1. z, roll and pitch are ignored in 2D.
 
-#include <cstddef>
 #include <string>
 #include <vector>
 
-#include "slam2d/core/se2.hpp"
+#include "slam2d/core/relation.hpp"
 
 namespace slam2d {
-
-struct Relation {
-  double stamp_from = 0.0;  // s, t1
-  double stamp_to = 0.0;    // s, t2
-  SE2 T_from_to;            // pose at t2 in the frame of the pose at t1
-  std::size_t line = 0;     // 1-based line in the file (0 when not read from a file)
-};
 
 /// Throws Error if unreadable, ParseError("PATH:LINE: ...") on a malformed line.
 std::vector<Relation> read_relations(const std::string& path);

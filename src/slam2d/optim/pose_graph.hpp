@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "slam2d/core/se2.hpp"
-#include "slam2d/io/pose_graph_io.hpp"
+#include "slam2d/core/pose_graph_file.hpp"
 
 namespace slam2d {
 

@@ -10,13 +10,13 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/io/number_format.hpp"
+#include "slam2d/core/number_text.hpp"
 
 namespace slam2d {
 
 namespace {
 
-using Messages = std::vector<CarmenMessage>;
+using Messages = std::vector<SensorMessage>;
 using Changes = std::vector<std::pair<std::string, double>>;
 
 // ---------------------------------------------------------------------------------------------
@@ -208,7 +208,7 @@ Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.
 // ---------------------------------------------------------------------------------------------
 // Messages: stamps, odometry chains, laser lines.
 
-double stamp_of(const CarmenMessage& message) {
+double stamp_of(const SensorMessage& message) {
   if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->scan.stamp;
   if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.stamp;
   return std::get<TruePoseMessage>(message).stamp;
@@ -216,14 +216,14 @@ double stamp_of(const CarmenMessage& message) {
 
 enum Chain : std::size_t { kLaserChain = 0, kOdomChain = 1 };
 
-std::optional<Chain> chain_of(const CarmenMessage& message) {
+std::optional<Chain> chain_of(const SensorMessage& message) {
   if (const auto* laser = std::get_if<LaserMessage>(&message)) {
     return laser->has_poses ? std::optional<Chain>(kLaserChain) : std::nullopt;
   }
   return std::holds_alternative<OdometryMessage>(message) ? kOdomChain : kLaserChain;
 }
 
-SE2 odometry_pose(const CarmenMessage& message) {
+SE2 odometry_pose(const SensorMessage& message) {
   if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->odom_pose;
   if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.pose;
   return std::get<TruePoseMessage>(message).odom_pose;
@@ -231,7 +231,7 @@ SE2 odometry_pose(const CarmenMessage& message) {
 
 // Sets the odometry pose; a laser line's estimated pose follows it when it repeated it, and a
 // ROBOTLASER1's laser pose keeps its mounting on the robot.
-void set_odometry_pose(CarmenMessage& message, const SE2& pose) {
+void set_odometry_pose(SensorMessage& message, const SE2& pose) {
   if (auto* laser = std::get_if<LaserMessage>(&message)) {
     if (laser->type == "ROBOTLASER1") {
       laser->laser_pose = pose * laser->scan.T_robot_sensor;
@@ -250,7 +250,7 @@ void set_odometry_pose(CarmenMessage& message, const SE2& pose) {
 double laser_path_length(const Messages& messages) {
   double length = 0.0;
   std::optional<SE2> previous;
-  for (const CarmenMessage& message : messages) {
+  for (const SensorMessage& message : messages) {
     if (chain_of(message) != kLaserChain) continue;
     const SE2 pose = odometry_pose(message);
     if (previous) length += (pose.translation() - previous->translation()).norm();
@@ -271,7 +271,7 @@ void remove_marked(Messages& messages, const std::vector<bool>& keep) {
 
 template <typename Function>
 void for_each_laser(Messages& messages, Function&& function) {
-  for (CarmenMessage& message : messages) {
+  for (SensorMessage& message : messages) {
     if (auto* laser = std::get_if<LaserMessage>(&message)) function(*laser);
   }
 }
@@ -361,13 +361,13 @@ Changes hold_changes(const HoldCounts& counts, const char* windows_name) {
 // Eq. (1): T'_k = T'_{k-1} * rule(T_{k-1}^-1 T_k) along each chain, from the log's first
 // odometry pose. Returns the number of poses changed.
 std::size_t reintegrate(Messages& messages, const std::function<SE2(const SE2&)>& rule) {
-  const auto first = std::find_if(messages.begin(), messages.end(), [](const CarmenMessage& m) { return chain_of(m).has_value(); });
+  const auto first = std::find_if(messages.begin(), messages.end(), [](const SensorMessage& m) { return chain_of(m).has_value(); });
   if (!rule || first == messages.end()) return 0;
   const SE2 anchor = odometry_pose(*first);
   std::array<SE2, 2> previous_original = {anchor, anchor};
   std::array<SE2, 2> previous_new = {anchor, anchor};
   std::size_t changed = 0;
-  for (CarmenMessage& message : messages) {
+  for (SensorMessage& message : messages) {
     const std::optional<Chain> chain = chain_of(message);
     if (!chain) continue;
     const SE2 pose = odometry_pose(message);
@@ -412,7 +412,7 @@ Changes apply(const OdomResetFault& fault, Messages& messages, Rng&) {
   std::set<long> restarts;
   std::size_t changed = 0;
   double max_jump_m = 0.0;
-  for (CarmenMessage& message : messages) {
+  for (SensorMessage& message : messages) {
     const std::optional<Chain> chain = chain_of(message);
     if (!chain) continue;
     ChainState& state = states[*chain];
@@ -500,7 +500,7 @@ Changes apply(const DuplicateFault& fault, Messages& messages, Rng& rng) {
   Messages out;
   out.reserve(messages.size());
   std::size_t duplicated = 0;
-  for (CarmenMessage& message : messages) {
+  for (SensorMessage& message : messages) {
     const bool twice = std::holds_alternative<LaserMessage>(message) && rng.bernoulli(fault.p);
     out.push_back(std::move(message));
     if (twice) {
@@ -671,14 +671,14 @@ std::string fault_spec(const Fault& fault) {
   return spec;
 }
 
-FaultReport apply_fault(const Fault& fault, std::vector<CarmenMessage>& messages, Rng& rng) {
+FaultReport apply_fault(const Fault& fault, std::vector<SensorMessage>& messages, Rng& rng) {
   FaultReport report;
   report.spec = fault_spec(fault);
   report.changes = std::visit([&](const auto& f) { return apply(f, messages, rng); }, fault);
   return report;
 }
 
-std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<CarmenMessage>& messages,
+std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<SensorMessage>& messages,
                                       std::uint64_t seed) {
   std::vector<FaultReport> reports;
   for (std::size_t i = 0; i < faults.size(); ++i) {

@@ -3,7 +3,7 @@
 // timing and laser scans, to measure how a method degrades (docs/faults.md has every fault, its
 // parameters, units and defaults, and why).
 //
-// A log is its messages in file order (std::vector<CarmenMessage>, as CarmenReader gives them).
+// A log is its messages in file order (std::vector<SensorMessage>, as CarmenReader gives them).
 // The laser geometry travels in every LaserMessage (angles, field of view, maximum range,
 // mounting); write_carmen_log (io/carmen_log.hpp) declares it again with PARAM lines, so faults
 // that change it (beams, fov, range-max) read back exactly. Faults are applied in the order
@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "slam2d/core/rng.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/core/sensor_log.hpp"
 
 namespace slam2d {
 
@@ -142,10 +142,10 @@ std::string fault_spec(const Fault& fault);
 
 /// Applies one fault to the messages (file order), drawing from `rng`. Throws Error when the
 /// fault cannot apply to a scan (fov keeping no beam, range-max beyond the scan's maximum range).
-FaultReport apply_fault(const Fault& fault, std::vector<CarmenMessage>& messages, Rng& rng);
+FaultReport apply_fault(const Fault& fault, std::vector<SensorMessage>& messages, Rng& rng);
 
 /// Applies the faults in order, fault i with Rng(seed).split(i).
-std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<CarmenMessage>& messages,
+std::vector<FaultReport> apply_faults(const std::vector<Fault>& faults, std::vector<SensorMessage>& messages,
                                       std::uint64_t seed);
 
 }  // namespace slam2d

@@ -6,8 +6,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/io/number_format.hpp"
-#include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/core/number_text.hpp"
 #include "slam2d/sim/ray_caster.hpp"
 #include "slam2d/sim/route_follower.hpp"
 
@@ -129,16 +128,6 @@ void Simulation::laser_tick(double stamp, const SE2& T_world_robot) {
   run_.truth.push_back(stamp, T_world_robot);
 }
 
-void write_laser_params(CarmenWriter& writer, const LaserMessage& laser) {
-  const LaserScan& scan = laser.scan;
-  writer.write_param("laser_front_laser_fov", format_number(rad_to_deg(laser.field_of_view)), 0.0);
-  writer.write_param("laser_front_laser_resolution", format_number(rad_to_deg(scan.angle_increment)), 0.0);
-  writer.write_param("robot_front_laser_max", format_number(scan.range_max), 0.0);
-  writer.write_param("robot_frontlaser_offset", format_number(scan.T_robot_sensor.x()), 0.0);
-  writer.write_param("robot_frontlaser_side_offset", format_number(scan.T_robot_sensor.y()), 0.0);
-  writer.write_param("robot_frontlaser_angular_offset", format_number(scan.T_robot_sensor.theta()), 0.0);
-}
-
 // Everything but the world name.
 void validate_settings(const SimulationConfig& config) {
   check(std::isfinite(config.duration) && config.duration >= 0.0 && config.duration <= kMaxDuration,
@@ -182,26 +171,16 @@ SimulatedRun simulate(const SimulationConfig& config, const World& world) {
 
 std::vector<const LaserMessage*> laser_messages(const SimulatedRun& run) {
   std::vector<const LaserMessage*> lasers;
-  for (const CarmenMessage& message : run.messages) {
+  for (const SensorMessage& message : run.messages) {
     if (const auto* laser = std::get_if<LaserMessage>(&message)) lasers.push_back(laser);
   }
   return lasers;
 }
 
-void write_run(const SimulatedRun& run, const std::string& log_path, const std::string& truth_path) {
-  CarmenWriter writer(log_path);
-  const SimulationConfig& config = run.config;
-  writer.write_comment("slam2d simulated run: world " + config.world + ", seed " + std::to_string(config.seed) +
-                       ", duration " + format_number(config.duration) + " s");
-  writer.write_comment("FLASER and TRUEPOS carry the odometry pose; TRUEPOS also carries the true pose");
-  const auto first_laser = std::find_if(run.messages.begin(), run.messages.end(),
-                                        [](const CarmenMessage& m) { return std::holds_alternative<LaserMessage>(m); });
-  if (first_laser != run.messages.end()) write_laser_params(writer, std::get<LaserMessage>(*first_laser));
-  for (const CarmenMessage& message : run.messages) {
-    std::visit([&writer](const auto& m) { writer.write(m); }, message);
-  }
-  writer.commit();
-  if (!truth_path.empty()) write_trajectory(truth_path, run.truth);
+std::vector<std::string> run_comments(const SimulationConfig& config) {
+  return {"slam2d simulated run: world " + config.world + ", seed " + std::to_string(config.seed) + ", duration " +
+              format_number(config.duration) + " s",
+          "FLASER and TRUEPOS carry the odometry pose; TRUEPOS also carries the true pose"};
 }
 
 }  // namespace slam2d

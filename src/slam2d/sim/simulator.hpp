@@ -1,7 +1,8 @@
 #pragma once
 // Simulated robot runs: a differential-drive robot follows a world's route (route_follower.hpp),
 // its wheel odometry drifts (odometry_model.hpp) and its laser scans the walls (laser_model.hpp).
-// The output is a CARMEN log in memory, in the file order of a raw log, plus the true trajectory.
+// The output is a sensor log in memory (core/sensor_log.hpp), in the file order of a raw CARMEN
+// log, plus the true trajectory.
 //
 // Deterministic: for a given config the run is identical on every platform. All randomness comes
 // from Rng(seed), split into one stream for the odometry noise and one for the laser, so changing
@@ -21,7 +22,7 @@
 #include <vector>
 
 #include "slam2d/core/trajectory.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/core/sensor_log.hpp"
 #include "slam2d/sim/laser_model.hpp"
 #include "slam2d/sim/odometry_model.hpp"
 #include "slam2d/sim/world.hpp"
@@ -42,7 +43,7 @@ struct SimulationConfig {
 
 struct SimulatedRun {
   SimulationConfig config;              // what made this run
-  std::vector<CarmenMessage> messages;  // file order: ODOM, FLASER, TRUEPOS; stamps from 0, never decreasing
+  std::vector<SensorMessage> messages;  // file order: ODOM, FLASER, TRUEPOS; stamps from 0, never decreasing
   Trajectory truth;                     // the true pose T_world_robot at each scan's stamp
 };
 
@@ -57,9 +58,8 @@ SimulatedRun simulate(const SimulationConfig& config, const World& world);
 /// The run's laser messages, in order (pointers into run.messages).
 std::vector<const LaserMessage*> laser_messages(const SimulatedRun& run);
 
-/// Writes the CARMEN log (atomic; gzip when the path ends in .gz): comments, the PARAM lines of the
-/// laser geometry (field of view, resolution, maximum range, mounting offsets), then every message.
-/// If `truth_path` is not empty, also writes the true trajectory there (write_trajectory format).
-void write_run(const SimulatedRun& run, const std::string& log_path, const std::string& truth_path);
+/// The comment lines that say how a run was made (world, seed, duration), for the head of its log:
+/// write_carmen_log(path, run_comments(run.config), run.messages) (io/carmen_log.hpp).
+std::vector<std::string> run_comments(const SimulationConfig& config);
 
 }  // namespace slam2d

@@ -49,7 +49,7 @@ SimulatedRun simulate_blinded_loop(const BlindedLoop& loop) {
   config.odometry.scale_error = 0.05;
   config.odometry.heading_bias = loop.heading_bias;
   SimulatedRun run = simulate(config, world);
-  for (CarmenMessage& message : run.messages) {
+  for (SensorMessage& message : run.messages) {
     auto* laser = std::get_if<LaserMessage>(&message);
     if (laser == nullptr || laser->scan.stamp < loop.blind_from || laser->scan.stamp >= loop.blind_until) continue;
     for (double& range : laser->scan.ranges) range = laser->scan.range_max;
