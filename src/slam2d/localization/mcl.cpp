@@ -8,6 +8,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/resampling.hpp"
 
 namespace slam2d {
 
@@ -38,19 +39,12 @@ void validate(const MclConfig& config) {
 
 namespace {
 
-// Low-variance resampling (Table 4.4): `count` poses drawn from `poses` by their weights into `out`.
+// Low-variance resampling (Table 4.4, core/resampling.hpp): `count` poses drawn from `poses` by
+// their weights into `out`.
 void draw_low_variance(const std::vector<SE2>& poses, const std::vector<double>& weights, std::size_t count, Rng& rng,
                        std::vector<SE2>& out) {
   out.clear();
-  const double step = 1.0 / static_cast<double>(count);
-  double r = rng.uniform(0.0, step);
-  double c = weights[0];
-  std::size_t i = 0;
-  for (std::size_t m = 0; m < count; ++m) {
-    const double u = r + static_cast<double>(m) * step;
-    while (u > c && i + 1 < poses.size()) c += weights[++i];
-    out.push_back(poses[i]);
-  }
+  for (const std::size_t i : low_variance_resample(weights, rng, count)) out.push_back(poses[i]);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/hector/scan_preprocessing.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
-#include "slam2d/slam/rbpf/resampling.hpp"
+#include "slam2d/core/resampling.hpp"
 #include "support/simulated_office.hpp"
 
 namespace slam2d {

@@ -12,7 +12,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/slam/hector/scan_preprocessing.hpp"
-#include "slam2d/slam/rbpf/resampling.hpp"
+#include "slam2d/core/resampling.hpp"
 
 namespace slam2d {
 

@@ -1,4 +1,4 @@
-#include "slam2d/slam/rbpf/resampling.hpp"
+#include "slam2d/core/resampling.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -33,16 +33,16 @@ double effective_sample_size(const std::vector<double>& weights) {
   return 1.0 / sum_squares;  // Eq. (20)
 }
 
-std::vector<std::size_t> low_variance_resample(const std::vector<double>& weights, double r) {
-  check(!weights.empty(), "low_variance_resample: no particles");
+std::vector<std::size_t> low_variance_resample(const std::vector<double>& weights, double r, std::size_t count) {
+  check(!weights.empty() && count > 0, "low_variance_resample: no particles");
   const std::size_t n = weights.size();
-  const double step = 1.0 / static_cast<double>(n);
-  check(r >= 0.0 && r < step, "low_variance_resample: r must lie in [0, 1 / N)");
+  const double step = 1.0 / static_cast<double>(count);
+  check(r >= 0.0 && r < step, "low_variance_resample: r must lie in [0, 1 / M)");
   std::vector<std::size_t> indices;
-  indices.reserve(n);
+  indices.reserve(count);
   double c = weights[0];  // Table 4.4, lines 3-4
   std::size_t i = 0;
-  for (std::size_t m = 0; m < n; ++m) {
+  for (std::size_t m = 0; m < count; ++m) {
     const double u = r + static_cast<double>(m) * step;  // line 6
     while (u > c && i + 1 < n) c += weights[++i];         // lines 7-10 (i + 1 < n guards rounding)
     indices.push_back(i);                                 // line 11
@@ -50,10 +50,18 @@ std::vector<std::size_t> low_variance_resample(const std::vector<double>& weight
   return indices;
 }
 
+std::vector<std::size_t> low_variance_resample(const std::vector<double>& weights, double r) {
+  return low_variance_resample(weights, r, weights.size());
+}
+
+std::vector<std::size_t> low_variance_resample(const std::vector<double>& weights, Rng& rng, std::size_t count) {
+  check(!weights.empty() && count > 0, "low_variance_resample: no particles");
+  const double step = 1.0 / static_cast<double>(count);
+  return low_variance_resample(weights, std::min(rng.uniform() * step, std::nextafter(step, 0.0)), count);
+}
+
 std::vector<std::size_t> low_variance_resample(const std::vector<double>& weights, Rng& rng) {
-  check(!weights.empty(), "low_variance_resample: no particles");
-  const double step = 1.0 / static_cast<double>(weights.size());
-  return low_variance_resample(weights, std::min(rng.uniform() * step, std::nextafter(step, 0.0)));
+  return low_variance_resample(weights, rng, weights.size());
 }
 
 }  // namespace slam2d
