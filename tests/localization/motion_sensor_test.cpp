@@ -15,7 +15,7 @@
 #include "slam2d/localization/localization_map.hpp"
 #include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/motion_model.hpp"
-#include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/registration/likelihood_field_match.hpp"
 #include "slam2d/localization/sensor_model.hpp"
 #include "support/test_support.hpp"
 
@@ -189,14 +189,14 @@ TEST(LikelihoodFieldModel, TheBatchOverPosesGivesEachPoseItsOwnValue) {
   EXPECT_LT((poses[best].translation() - truth.translation()).norm(), 0.5) << "the best pose is one near the truth";
 }
 
-TEST(ScanToMap, RecoversAKnownOffset) {
+TEST(LikelihoodFieldMatch, RecoversAKnownOffset) {
   const LocalizationMap map(room());
   const SE2 truth(1.0, -0.5, 0.3);
   const ScanBeams beams = select_beams(scan_in_room(map.map(), truth, 361), 120, 30.0);
-  const ScanToMapResult result = match_scan_to_map(map.field(), beams.points_robot, truth * SE2(0.15, -0.1, 0.05));
+  const MatchResult result = match_likelihood_field(map.field(), beams.points_robot, truth * SE2(0.15, -0.1, 0.05));
   EXPECT_TRUE(result.converged);
-  EXPECT_TRUE(test::poses_near(result.T_map_robot, truth, 0.03, 0.01)) << result.T_map_robot;
-  EXPECT_GT(result.inlier_fraction, 0.95);
+  EXPECT_TRUE(test::poses_near(result.T_target_source, truth, 0.03, 0.01)) << result.T_target_source;
+  EXPECT_GT(inlier_fraction(result, beams.points_robot.size()), 0.95);
   EXPECT_LT(std::sqrt(result.covariance(0, 0)), 0.05);
 }
 

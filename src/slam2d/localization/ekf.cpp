@@ -77,15 +77,15 @@ bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) 
   PointCloud2 scan;
   scan.points.assign(points_robot.begin(), points_robot.end());
   const MatchResult coarse = match_correlative(table_, scan, pose_, search);
-  const ScanToMapResult match = match_scan_to_map(map_.field(), points_robot, coarse.T_target_source, config_.matcher);
-  if (match.inlier_fraction < config_.min_inlier_fraction) {
+  const MatchResult match = match_likelihood_field(map_.field(), points_robot, coarse.T_target_source, config_.matcher);
+  if (inlier_fraction(match, points_robot.size()) < config_.min_inlier_fraction) {
     ++stats_.rejected_match;
     return false;
   }
   const Covariance3 R = coarse.covariance + covariance_from_sigmas(config_.measurement_sigma_xy, config_.measurement_sigma_xy,
                                                                    config_.measurement_sigma_theta);
-  Eigen::Vector3d innovation = match.T_map_robot.vector() - pose_.vector();
-  innovation.z() = angle_difference(match.T_map_robot.theta(), pose_.theta());
+  Eigen::Vector3d innovation = match.T_target_source.vector() - pose_.vector();
+  innovation.z() = angle_difference(match.T_target_source.theta(), pose_.theta());
   const Eigen::Matrix3d S = covariance_ + R;
   if (innovation.dot(S.ldlt().solve(innovation)) > config_.gate_chi2) {  // Mahalanobis gate
     ++stats_.rejected_gate;

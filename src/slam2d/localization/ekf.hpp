@@ -15,7 +15,7 @@
 // bounds): it finds the best pose in the window rather than the nearest local minimum, and its
 // response distribution over the window is R, so a corridor's long axis or a second similar
 // place inside the window shows in R. The table's steps (a map cell, half a degree) are then
-// refined by least squares on the distance field (scan_to_map.hpp), whose fit feeds the inlier
+// refined by least squares on the distance field (registration/likelihood_field_match.hpp), whose fit feeds the inlier
 // gate.
 // Gates reject implausible matches (no fusion; the covariance grows by rejection_sigma per
 // rejected scan, so that after a wheel slip the gate opens to the next consistent match):
@@ -35,7 +35,7 @@
 #include "slam2d/localization/localization_map.hpp"
 #include "slam2d/localization/localizer.hpp"
 #include "slam2d/localization/motion_model.hpp"
-#include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/registration/likelihood_field_match.hpp"
 #include "slam2d/registration/correlative_grid.hpp"
 
 namespace slam2d {
@@ -44,7 +44,7 @@ struct EkfConfig {
   // Rotation noise from rotation well above the particle filter's: a Gaussian cannot absorb the
   // wheel slip of a fast turn in the tails as a particle set does, and a rejected match costs more.
   OdometryMotionConfig motion{.alpha1 = 0.2};
-  ScanToMapConfig matcher{};          // the refinement
+  LikelihoodFieldMatchConfig matcher{};  // the refinement
   // The correlative stage: window half-widths +-3 sigma of the prediction, clamped to these.
   double min_window_xy = 0.1;         // m, > 0
   double max_window_xy = 0.5;         // m, >= min_window_xy

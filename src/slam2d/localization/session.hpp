@@ -5,7 +5,7 @@
 // events the summary reports. The odometry the localizer sees:
 // - a trusted increment moves it; a jump beyond what the robot could do moves nothing;
 // - within a stall, with the map given and the last estimate localized, the scan matched in the
-//   map from the last estimate (localization/scan_to_map.hpp; at least half of the end points
+//   map from the last estimate (registration/likelihood_field_match.hpp; at least half of the end points
 //   within 0.2 m of an obstacle) moves it by the motion it shows; otherwise nothing does. A
 //   localizer predicts from odometry alone: without this it stands still while the robot drives
 //   on (MCL with a 15 s stall every 120 s: Intel 0.28 m, FR079 0.73 m; docs/odometry_guard.md);

@@ -1,5 +1,6 @@
 #pragma once
-// Scan-to-map matching for the EKF's measurement: the pose that minimises the squared distances
+// Scan-to-map matching against a likelihood field (the EKF's measurement, the localizers' motion
+// within an odometry stall): the pose that minimises the squared distances
 // of the scan's end points to the nearest obstacle of the map,
 //   T* = argmin_T sum_i d(T p_i)^2,
 // with d the likelihood field's distance (grid/likelihood_field.hpp: exact EDT, bilinear, with
@@ -12,19 +13,20 @@
 //
 // The covariance is sigma^2 (J^T J)^-1 at the optimum (the Hessian approximation, as Hector's
 // and Censi's covariance-from-Hessian), with sigma the larger of config.sigma and the RMS
-// residual, so a poor fit widens it. The fraction of end points within inlier_distance of an
-// obstacle after the match is what the EKF's gate uses.
+// residual, so a poor fit widens it. MatchResult::inliers counts the end points within
+// inlier_distance of an obstacle after the match (over all points: the EKF's gate).
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
-#include "slam2d/core/covariance.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/likelihood_field.hpp"
+#include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
 
-struct ScanToMapConfig {
+struct LikelihoodFieldMatchConfig {
   int max_iterations = 30;        // 1, >= 1
   double outlier_distance = 0.5;  // m, > 0: points farther from an obstacle do not count
   double inlier_distance = 0.2;   // m, > 0: points this close after the match are inliers
@@ -33,16 +35,14 @@ struct ScanToMapConfig {
   double epsilon_theta = 1e-3;    // rad: ... and this
 };
 
-struct ScanToMapResult {
-  SE2 T_map_robot;
-  Covariance3 covariance = Covariance3::Identity() * 1e6;
-  bool converged = false;       // the step became small with >= 3 points
-  int iterations = 0;
-  double inlier_fraction = 0.0; // 1, of all points
-  double residual = 0.0;        // m, RMS distance of the points used
-};
+/// T_target_source is T_map_robot (the guess when the match fails); converged: the step became
+/// small with >= 3 points; residual: the RMS distance of the points used (m).
+MatchResult match_likelihood_field(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
+                                   const SE2& T_map_robot_guess, const LikelihoodFieldMatchConfig& config = {});
 
-ScanToMapResult match_scan_to_map(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
-                                  const SE2& T_map_robot_guess, const ScanToMapConfig& config = {});
+/// The share of `points` end points that are inliers of `result` (0 for none).
+inline double inlier_fraction(const MatchResult& result, std::size_t points) {
+  return points == 0 ? 0.0 : static_cast<double>(result.inliers) / static_cast<double>(points);
+}
 
 }  // namespace slam2d

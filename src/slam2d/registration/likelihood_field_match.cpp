@@ -1,4 +1,4 @@
-#include "slam2d/localization/scan_to_map.hpp"
+#include "slam2d/registration/likelihood_field_match.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -17,7 +17,7 @@ struct NormalEquations {
 
 // J^T J and J^T r of the distances at pose T (Gauss-Newton linearisation in (x, y, theta)).
 NormalEquations linearize(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points, const SE2& T,
-                          const ScanToMapConfig& config) {
+                          const LikelihoodFieldMatchConfig& config) {
   NormalEquations eq;
   const double c = std::cos(T.theta());
   const double s = std::sin(T.theta());
@@ -40,7 +40,7 @@ NormalEquations linearize(const LikelihoodField& field, const std::vector<Eigen:
 
 // The truncated cost sum_i min(d_i, outlier_distance)^2: continuous when points cross the cut.
 double truncated_cost(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points, const SE2& T,
-                      const ScanToMapConfig& config) {
+                      const LikelihoodFieldMatchConfig& config) {
   double cost = 0.0;
   for (const Eigen::Vector2d& p : points) {
     const double d = std::min(field.distance(T.act(p)), config.outlier_distance);
@@ -51,10 +51,10 @@ double truncated_cost(const LikelihoodField& field, const std::vector<Eigen::Vec
 
 }  // namespace
 
-ScanToMapResult match_scan_to_map(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
-                                  const SE2& T_map_robot_guess, const ScanToMapConfig& config) {
-  ScanToMapResult result;
-  result.T_map_robot = T_map_robot_guess;
+MatchResult match_likelihood_field(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
+                                   const SE2& T_map_robot_guess, const LikelihoodFieldMatchConfig& config) {
+  MatchResult result;
+  result.T_target_source = T_map_robot_guess;
   if (points_robot.size() < 3) return result;
   SE2 T = T_map_robot_guess;
   double cost = truncated_cost(field, points_robot, T, config);
@@ -94,9 +94,9 @@ ScanToMapResult match_scan_to_map(const LikelihoodField& field, const std::vecto
     result.converged = false;
     return result;
   }
-  result.T_map_robot = T;
+  result.T_target_source = T;
   result.residual = std::sqrt(eq.squared / eq.used);
-  result.inlier_fraction = static_cast<double>(eq.inliers) / static_cast<double>(points_robot.size());
+  result.inliers = static_cast<std::size_t>(eq.inliers);
   const double sigma = std::max(config.sigma, result.residual);
   Eigen::Matrix3d H = eq.H;
   H.diagonal().array() += 1e-9;
