@@ -10,8 +10,8 @@
 #include "slam2d/grid/map_pyramid.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
-#include "slam2d/slam/hector/scan_matcher.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/registration/occupancy_gradient_match.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 
 namespace {
 

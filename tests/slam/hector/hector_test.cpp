@@ -18,8 +18,8 @@
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/sim/world.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
-#include "slam2d/slam/hector/scan_matcher.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/registration/occupancy_gradient_match.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 #include "support/simulated_office.hpp"
 #include "support/test_support.hpp"
 

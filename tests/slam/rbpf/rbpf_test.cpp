@@ -14,7 +14,7 @@
 #include "slam2d/eval/ate.hpp"
 #include "slam2d/grid/bilinear.hpp"
 #include "slam2d/sim/simulator.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
 #include "slam2d/core/resampling.hpp"
 #include "support/simulated_office.hpp"

@@ -7,7 +7,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/registration/normals.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 
 namespace slam2d {
 

@@ -4,9 +4,9 @@
 //
 // For every scan: predict the pose (odometry delta, constant velocity or the last pose), optionally
 // correct the sweep's rotational distortion and level the scan with an IMU attitude, match the
-// end points against the map pyramid coarse to fine (scan_matcher.hpp), and integrate the scan
-// into every level when the pose moved more than a distance or angle threshold since the last
-// map update. No loop closure: the map is built once, scan by scan. Deterministic.
+// end points against the map pyramid coarse to fine (registration/occupancy_gradient_match.hpp),
+// and integrate the scan into every level when the pose moved more than a distance or angle
+// threshold since the last map update. No loop closure: the map is built once, scan by scan. Deterministic.
 
 #include <optional>
 
@@ -16,8 +16,8 @@
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
-#include "slam2d/slam/hector/scan_matcher.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/registration/occupancy_gradient_match.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 
 namespace slam2d {
 

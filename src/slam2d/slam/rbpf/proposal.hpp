@@ -4,7 +4,8 @@
 //
 // For one particle with pose x_{t-1} and map m, given the odometry motion u and the scan z:
 //   x' = x_{t-1} (+) u                                 prediction (the odometry motion model's mode)
-//   x* = argmax_x p(z | m, x)                          scan matching from x' (Hector, scan_matcher.hpp)
+//   x* = argmax_x p(z | m, x)                          scan matching from x' (Hector's matcher,
+//                                                      registration/occupancy_gradient_match.hpp)
 //   x_j = x* (+) v_j, j = 1..K                          a fixed grid of K poses around x*
 //   tau_j = p(z | m, x_j) p(x_j | x_{t-1}, u)           Eq. (14)-(15): likelihood times motion model
 //   eta = sum_j tau_j                                   Eq. (18): the proposal's normaliser
@@ -25,7 +26,7 @@
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
-#include "slam2d/slam/hector/scan_matcher.hpp"
+#include "slam2d/registration/occupancy_gradient_match.hpp"
 
 namespace slam2d {
 

@@ -11,7 +11,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 #include "slam2d/core/resampling.hpp"
 
 namespace slam2d {

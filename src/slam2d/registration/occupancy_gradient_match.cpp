@@ -1,4 +1,4 @@
-#include "slam2d/slam/hector/scan_matcher.hpp"
+#include "slam2d/registration/occupancy_gradient_match.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "slam2d/slam/hector/scan_preprocessing.hpp"
+#include "slam2d/core/scan_preprocessing.hpp"
 
 #include <algorithm>
 #include <cmath>
