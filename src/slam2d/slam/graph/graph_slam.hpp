@@ -35,7 +35,7 @@
 #include "slam2d/optim/sparse_pose_adjustment.hpp"
 #include "slam2d/slam/graph/keyframes.hpp"
 #include "slam2d/slam/graph/loop_closure.hpp"
-#include "slam2d/slam/graph/scan_to_map.hpp"
+#include "slam2d/registration/correlative_map_match.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
 
 namespace slam2d {

@@ -5,8 +5,10 @@
 // indoor-localization study), so that a standing robot still contributes its best, undistorted
 // scans.
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <optional>
+#include <vector>
 
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
@@ -43,5 +45,11 @@ class KeyframeSelector {
   std::optional<SE2> last_pose_;
   double last_stamp_ = 0.0;
 };
+
+/// Map-frame points (and normals) of the keyframes, each at its pose, within `radius` of `center`,
+/// one per `voxel` x `voxel` cell (the first keyframe's first: the same wall seen from many
+/// keyframes is rasterised once). voxel = 0 keeps every point.
+PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
+                      const Eigen::Vector2d& center, double radius, double voxel);
 
 }  // namespace slam2d

@@ -227,14 +227,14 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
     const double radius = config_.map_radius + largest_window(coarse->correlative);
     const MatchMap map =
         make_match_map(map_cloud(members, poses, guess.translation(), radius, coarse->map_voxel), *coarse);
-    const MapMatchResult found = match_scan_to_map(map, scan, guess, *coarse);
+    const MapMatchResult found = match_correlative_map(map, scan, guess, *coarse);
     if (!found.converged) return std::nullopt;
     start = found.T_map_robot;
   }
   const double radius = config_.map_radius + largest_window(match_config.correlative);
   const MatchMap map =
       make_match_map(map_cloud(members, poses, start.translation(), radius, match_config.map_voxel), match_config);
-  const MapMatchResult match = match_scan_to_map(map, scan, start, match_config);
+  const MapMatchResult match = match_correlative_map(map, scan, start, match_config);
   if (!match.converged || !match.refined || match.inlier_fraction < config_.min_inlier_fraction) return std::nullopt;
   if (config_.reject_degenerate && match.degenerate) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> translation(match.covariance.topLeftCorner<2, 2>());

@@ -40,7 +40,7 @@
 
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/graph/keyframes.hpp"
-#include "slam2d/slam/graph/scan_to_map.hpp"
+#include "slam2d/registration/correlative_map_match.hpp"
 
 namespace slam2d {
 

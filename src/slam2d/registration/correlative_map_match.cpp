@@ -1,9 +1,7 @@
-#include "slam2d/slam/graph/scan_to_map.hpp"
+#include "slam2d/registration/correlative_map_match.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <unordered_set>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/kd_tree.hpp"
@@ -23,31 +21,6 @@ void validate(const MapMatchConfig& config) {
   check(std::isfinite(config.map_voxel) && config.map_voxel >= 0.0, "scan-to-map: map_voxel must be >= 0");
   check(config.min_score_at_window_edge >= 0.0 && config.min_score_at_window_edge <= 1.0,
         "scan-to-map: min_score_at_window_edge must be in [0, 1]");
-}
-
-PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
-                      const Eigen::Vector2d& center, double radius, double voxel) {
-  PointCloud2 map;
-  const double radius_squared = radius * radius;
-  std::unordered_set<std::uint64_t> occupied;
-  const auto first_in_voxel = [&](const Eigen::Vector2d& point) {
-    if (voxel <= 0.0) return true;
-    const auto x = static_cast<std::int64_t>(std::floor(point.x() / voxel));
-    const auto y = static_cast<std::int64_t>(std::floor(point.y() / voxel));
-    return occupied.insert((static_cast<std::uint64_t>(x) << 32) ^ static_cast<std::uint32_t>(y)).second;
-  };
-  for (std::size_t k = 0; k < keyframes.size(); ++k) {
-    const PointCloud2& cloud = keyframes[k]->cloud;
-    const SE2& T = T_map_keyframe[k];
-    const Eigen::Matrix2d R = T.rotation();
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const Eigen::Vector2d point = T * cloud.points[i];
-      if ((point - center).squaredNorm() > radius_squared || !first_in_voxel(point)) continue;
-      map.points.push_back(point);
-      map.normals.push_back(R * cloud.normals[i]);
-    }
-  }
-  return map;
 }
 
 namespace {
@@ -85,7 +58,7 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config) {
   return map;
 }
 
-MapMatchResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+MapMatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
                                   const MapMatchConfig& config) {
   MapMatchResult result;
   result.T_map_robot = T_map_robot_guess;

@@ -1,6 +1,7 @@
 #pragma once
-// Scan-to-map matching for graph SLAM's loop closures (the "scan matcher" of Karto): the scan's end
-// points (robot frame) against a cloud of earlier keyframes' points in the map frame, rasterised
+// Scan-to-map matching against a point map (graph SLAM's loop closures, the "scan matcher" of
+// Karto): the scan's end points (robot frame) against a cloud of map-frame points (graph SLAM:
+// earlier keyframes' points, slam/graph/keyframes.hpp map_cloud), rasterised
 // into a correlative lookup table (E. Olson, "Real-time correlative scan matching", ICRA 2009) and
 // searched by branch-and-bound over a window around the guess; the best pose is then refined by
 // point-to-line least squares against the same points (K.-L. Low 2004, registration/
@@ -8,7 +9,7 @@
 // floored so that no constraint claims more than the sensor can give.
 //
 // Loop closure matches a keyframe against a chain of old keyframes over a large window
-// (loop_closure.hpp).
+// (slam/graph/loop_closure.hpp).
 
 #include <cstddef>
 #include <vector>
@@ -18,7 +19,6 @@
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/correlative.hpp"
 #include "slam2d/registration/point_to_plane.hpp"
-#include "slam2d/slam/graph/keyframes.hpp"
 
 namespace slam2d {
 
@@ -51,12 +51,6 @@ struct MapMatchResult {
 /// Throws Error for out-of-range values.
 void validate(const MapMatchConfig& config);
 
-/// Map-frame points (and normals) of the keyframes, each at its pose, within `radius` of `center`,
-/// one per `voxel` x `voxel` cell (the first keyframe's first: the same wall seen from many
-/// keyframes is rasterised once). voxel = 0 keeps every point.
-PointCloud2 map_cloud(const std::vector<const Keyframe*>& keyframes, const std::vector<SE2>& T_map_keyframe,
-                      const Eigen::Vector2d& center, double radius, double voxel);
-
 /// The map side of a match, built once and matched against many scans: the map-frame points
 /// (with normals) and their correlative lookup table.
 struct MatchMap {
@@ -69,7 +63,7 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config);
 
 /// Matches the robot-frame `scan` against the map from the guess. A map or scan of fewer than 3
 /// points gives converged = false and the guess.
-MapMatchResult match_scan_to_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
-                                  const MapMatchConfig& config);
+MapMatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+                                      const MapMatchConfig& config);
 
 }  // namespace slam2d
