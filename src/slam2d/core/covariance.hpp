@@ -9,6 +9,12 @@ namespace slam2d {
 
 using Covariance3 = Eigen::Matrix3d;
 
+/// The variance (m^2, m rad, rad^2) that says "unknown": what a result reports for a direction
+/// nothing constrained (an estimator that failed, an empty scan). One value for every method.
+inline constexpr double kUnknownVariance = 1e6;
+/// kUnknownVariance times the identity.
+inline Covariance3 unknown_covariance() { return Covariance3::Identity() * kUnknownVariance; }
+
 /// Diagonal covariance from standard deviations (m, m, rad).
 Covariance3 covariance_from_sigmas(double sigma_x, double sigma_y, double sigma_theta);
 

@@ -25,7 +25,6 @@ constexpr std::size_t kMinPoints = 3;
 constexpr int kMaxSteps = 1 << 20;                   // half-width of the window, in steps, per axis
 constexpr double kMaxRotatedPoints = 1LL << 28;      // angles x points kept in memory
 constexpr std::size_t kMaxSourcePoints = 1 << 23;    // 255 n stays an int
-constexpr double kHugeVariance = 1e6;
 constexpr double kNegligibleResponse = 1e-3;       // p relative to the best pose's, Eq. (3)
 
 /// ceil(log2(value)) for value >= 1.
@@ -317,7 +316,7 @@ class ResponseMoments {
       if (searched[static_cast<std::size_t>(a)] == 0) {  // not searched: the match says nothing
         cov.row(a).setZero();
         cov.col(a).setZero();
-        cov(a, a) = kHugeVariance;
+        cov(a, a) = kUnknownVariance;
       }
     }
     return 0.5 * (cov + cov.transpose());

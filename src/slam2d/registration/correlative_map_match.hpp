@@ -40,7 +40,7 @@ struct MapMatchConfig {
 
 struct MapMatchResult {
   SE2 T_map_robot;                                   // the estimate (the guess when not converged)
-  Covariance3 covariance = Covariance3::Identity() * 1e6;
+  Covariance3 covariance = unknown_covariance();
   bool converged = false;        // the correlative search found an inner maximum above min_score
   bool refined = false;          // the refinement was applied
   double score = 0.0;            // 1, in [0, 1]: fraction of the scan's points on the map (correlative inliers)

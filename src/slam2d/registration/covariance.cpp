@@ -7,10 +7,6 @@
 namespace slam2d {
 namespace {
 
-constexpr double kUnknownVariance = 1e6;
-
-Covariance3 unknown_covariance() { return Covariance3::Identity() * kUnknownVariance; }
-
 Eigen::Matrix2d rotation(double theta) {
   Eigen::Matrix2d R;
   R << std::cos(theta), -std::sin(theta), std::sin(theta), std::cos(theta);

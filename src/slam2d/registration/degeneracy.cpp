@@ -103,7 +103,6 @@ void apply(const DegeneracyAnalysis& analysis, MatchResult& result) {
   // (noisy normals lend it information). Along the weak direction w the variance is raised to at
   // least the Cramer-Rao bound 1 / (w^T I w) and at least the variance along the strongest
   // direction times the information's eigenvalue ratio, the shape I^-1 would have.
-  constexpr double kUnknownVariance = 1e6;
   const Eigen::Vector3d& w = analysis.weak_direction;
   const Eigen::Vector3d strongest = analysis.directions.col(2);
   const double weak_information = w.dot(analysis.information * w);

@@ -19,7 +19,7 @@ namespace slam2d {
 
 struct MatchResult {
   SE2 T_target_source;                                   // the estimate
-  Covariance3 covariance = Covariance3::Identity() * 1e6;  // m^2, m rad, rad^2; huge when unknown
+  Covariance3 covariance = unknown_covariance();  // m^2, m rad, rad^2; kUnknownVariance when unknown
   bool converged = false;       // the stopping test was met before the iteration limit
   int iterations = 0;           // of the matcher's main loop (poses scored, for search methods)
   std::size_t inliers = 0;      // correspondences kept at the estimate

@@ -74,14 +74,11 @@ Eigen::Matrix3d constrained_projector(const Eigen::Matrix3d& information, double
   return projector;
 }
 
-// Variance (m^2, rad^2) reported for a pose the scan does not constrain at all.
-constexpr double kUnconstrainedVariance = 1e6;
-
 // The covariance s^2 H^-1 with s^2 = sum r^2 / (n - 3), the residual variance. When H is singular
-// or there are too few points, the match says nothing: a huge variance, never a zero one.
+// or there are too few points, the match says nothing: unknown_covariance(), never a zero one.
 Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
   const auto inverse = inverse_hessian(equations);
-  if (!inverse || equations.residuals <= 3) return kUnconstrainedVariance * Covariance3::Identity();
+  if (!inverse || equations.residuals <= 3) return unknown_covariance();
   const double variance = 2.0 * equations.cost / static_cast<double>(equations.residuals - 3);
   return variance * *inverse;
 }
@@ -166,7 +163,7 @@ HectorMatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::ve
   if (points_robot.empty()) {
     HectorMatchResult result;
     result.T_map_robot = T_map_robot_guess;
-    result.covariance = kUnconstrainedVariance * Covariance3::Identity();
+    result.covariance = unknown_covariance();
     result.degenerate = true;
     return result;
   }

@@ -53,7 +53,7 @@ struct HectorMatcherConfig {
 
 struct HectorMatchResult {
   SE2 T_map_robot;                // the estimate
-  Covariance3 covariance = Covariance3::Zero();  // m^2, m rad, rad^2: s^2 H^-1 on the finest level; 1e6 I when unconstrained
+  Covariance3 covariance = unknown_covariance();  // m^2, m rad, rad^2: s^2 H^-1 on the finest level; unknown when unconstrained
   NormalEquations<3> equations;   // the last linearisation on the finest level (H, b, cost)
   bool converged = false;         // the finest level's last step was below convergence_step
   bool degenerate = false;        // H singular on the finest level: the pose was not (fully) improved

@@ -336,13 +336,13 @@ Covariance3 point_to_line_covariance(const TargetIndex& t, const PointCloud2& so
   const double scale = H.diagonal().cwiseAbs().maxCoeff();
   if (pairs < 3 || ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(scale > 0.0) ||
       ldlt.vectorD().minCoeff() <= 1e-12 * scale) {
-    return Covariance3::Identity() * 1e6;
+    return unknown_covariance();
   }
   const Eigen::Matrix3d H_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
   for (int k = 0; k < t.size(); ++k) spread_sum.add(target_columns[k]);
   const Eigen::Matrix3d spread = spread_sum.matrix() * (range_sigma * range_sigma);
   const Covariance3 covariance = H_inverse * spread * H_inverse;
-  if (!covariance.allFinite()) return Covariance3::Identity() * 1e6;
+  if (!covariance.allFinite()) return unknown_covariance();
   return make_positive_definite(0.5 * (covariance + covariance.transpose()), 1e-18);
 }
 
