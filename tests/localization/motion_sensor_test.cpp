@@ -198,6 +198,30 @@ TEST(LikelihoodFieldMatch, RecoversAKnownOffset) {
   EXPECT_TRUE(test::poses_near(result.T_target_source, truth, 0.03, 0.01)) << result.T_target_source;
   EXPECT_GT(inlier_fraction(result, beams.points_robot.size()), 0.95);
   EXPECT_LT(std::sqrt(result.covariance(0, 0)), 0.05);
+  EXPECT_FALSE(result.degenerate) << "a room's corner constrains every direction";
+}
+
+// Two parallel walls 2 m apart, their ends out of a 4 m scanner's reach: the fit pins y and the
+// heading, not x. The match says so (degenerate, weak direction along x) and its covariance is
+// widest along x.
+TEST(LikelihoodFieldMatch, ACorridorIsDegenerateAlongItsAxis) {
+  OccupancyMap corridor;
+  corridor.resolution = 0.05;
+  corridor.origin = SE2(-10.0, -2.0, 0.0);
+  corridor.width = 400;
+  corridor.height = 80;
+  corridor.cells.assign(400 * 80, OccupancyMap::kFree);
+  for (int i = 0; i < 400; ++i) corridor.at(i, 20) = corridor.at(i, 60) = OccupancyMap::kOccupied;  // y = -1, +1
+  const LocalizationMap map(corridor);
+  const SE2 truth(0.0, 0.1, 0.05);
+  LaserScan scan = scan_in_room(map.map(), truth, 181);
+  for (double& r : scan.ranges) r = std::min(r, 20.0);
+  const ScanBeams beams = select_beams(scan, 120, 4.0);
+  const MatchResult result = match_likelihood_field(map.field(), beams.points_robot, truth * SE2(0.0, 0.05, 0.02));
+  EXPECT_TRUE(result.degenerate);
+  EXPECT_GT(std::abs(result.weak_direction.x()), 0.95) << result.weak_direction.transpose();
+  EXPECT_NEAR(result.T_target_source.y(), truth.y(), 0.02);
+  EXPECT_GT(result.covariance(0, 0), 100.0 * result.covariance(1, 1));
 }
 
 }  // namespace

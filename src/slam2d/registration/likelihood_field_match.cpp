@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "slam2d/registration/degeneracy.hpp"
+
 namespace slam2d {
 
 namespace {
@@ -101,6 +103,14 @@ MatchResult match_likelihood_field(const LikelihoodField& field, const std::vect
   Eigen::Matrix3d H = eq.H;
   H.diagonal().array() += 1e-9;
   result.covariance = make_positive_definite(sigma * sigma * H.inverse(), 1e-10);
+  // The degeneracy verdict on the scan's information (registration/degeneracy.hpp), rotation
+  // scaled at the points' RMS distance; the covariance above already shows the weak direction.
+  double squared_radius = 0.0;
+  for (const Eigen::Vector2d& p : points_robot) squared_radius += p.squaredNorm();
+  const DegeneracyAnalysis analysis =
+      analyze_information(eq.H, std::sqrt(squared_radius / static_cast<double>(points_robot.size())), config.degeneracy);
+  result.degenerate = analysis.degenerate;
+  result.weak_direction = analysis.weak_direction;
   return result;
 }
 

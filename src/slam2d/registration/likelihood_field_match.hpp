@@ -14,7 +14,9 @@
 // The covariance is sigma^2 (J^T J)^-1 at the optimum (the Hessian approximation, as Hector's
 // and Censi's covariance-from-Hessian), with sigma the larger of config.sigma and the RMS
 // residual, so a poor fit widens it. MatchResult::inliers counts the end points within
-// inlier_distance of an obstacle after the match (over all points: the EKF's gate).
+// inlier_distance of an obstacle after the match (over all points: the EKF's gate), and
+// degenerate / weak_direction say whether the fit's information J^T J constrains every direction
+// (a corridor's axis does not; registration/degeneracy.hpp).
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -22,6 +24,7 @@
 
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/likelihood_field.hpp"
+#include "slam2d/registration/degeneracy.hpp"
 #include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
@@ -33,6 +36,7 @@ struct LikelihoodFieldMatchConfig {
   double sigma = 0.05;            // m, > 0: floor of the per-point residual sigma of the covariance
   double epsilon_xy = 1e-3;       // m: stop when the step is below this ...
   double epsilon_theta = 1e-3;    // rad: ... and this
+  DegeneracyConfig degeneracy{};  // the verdict on the fit's information (MatchResult::degenerate)
 };
 
 /// T_target_source is T_map_robot (the guess when the match fails); converged: the step became
