@@ -105,13 +105,19 @@ TEST(KldSampling, BoundMatchesFoxEquation10) {
 }
 
 // A 10 m x 10 m room at 0.1 m: walls on the border cells, free inside.
-OccupancyMap room() {
+// A free map of width x height cells.
+OccupancyMap free_map(double resolution, const SE2& origin, int width, int height) {
   OccupancyMap map;
-  map.resolution = 0.1;
-  map.origin = SE2(-5.0, -5.0, 0.0);
-  map.width = 100;
-  map.height = 100;
-  map.cells.assign(100 * 100, OccupancyMap::kFree);
+  map.resolution = resolution;
+  map.origin = origin;
+  map.width = width;
+  map.height = height;
+  map.cells.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), OccupancyMap::kFree);
+  return map;
+}
+
+OccupancyMap room() {
+  OccupancyMap map = free_map(0.1, SE2(-5.0, -5.0, 0.0), 100, 100);
   for (int i = 0; i < 100; ++i) {
     map.at(i, 0) = map.at(i, 99) = map.at(0, i) = map.at(99, i) = OccupancyMap::kOccupied;
   }
@@ -205,12 +211,7 @@ TEST(LikelihoodFieldMatch, RecoversAKnownOffset) {
 // heading, not x. The match says so (degenerate, weak direction along x) and its covariance is
 // widest along x.
 TEST(LikelihoodFieldMatch, ACorridorIsDegenerateAlongItsAxis) {
-  OccupancyMap corridor;
-  corridor.resolution = 0.05;
-  corridor.origin = SE2(-10.0, -2.0, 0.0);
-  corridor.width = 400;
-  corridor.height = 80;
-  corridor.cells.assign(400 * 80, OccupancyMap::kFree);
+  OccupancyMap corridor = free_map(0.05, SE2(-10.0, -2.0, 0.0), 400, 80);
   for (int i = 0; i < 400; ++i) corridor.at(i, 20) = corridor.at(i, 60) = OccupancyMap::kOccupied;  // y = -1, +1
   const LocalizationMap map(corridor);
   const SE2 truth(0.0, 0.1, 0.05);
