@@ -78,6 +78,12 @@ GraphRun run_graph(const std::vector<LaserMessage>& scans, const std::vector<Rel
   return {relation_error(slam.trajectory(), relations), slam.odometry_stats()};
 }
 
+// Graph SLAM (guarded) on the public log `name` with its odometry restarted every 120 s.
+GraphRun graph_with_restarts_every_120_s(const std::filesystem::path& data, const std::string& name) {
+  const std::vector<LaserMessage> scans = stalled_scans(data / name / (name + ".clf.gz"), "odom-reset:every=120");
+  return run_graph(scans, read_relations((data / name / (name + ".relations")).string()), true);
+}
+
 class OdometryStallRealData : public ::testing::TestWithParam<StalledLog> {};
 
 TEST_P(OdometryStallRealData, GraphSlamStaysWithinOneAndAHalfTimesItsCleanBound) {
@@ -165,8 +171,7 @@ TEST(OdometryStallRealData, RbpfCatchUpAfterAReversingStallOnFr079) {
 // the robot could have driven since the pose last changed became a jump. Measured 0.0371 m.
 TEST(OdometryStallRealData, GraphSlamPlacesOdometryRestartsFromTheLastPose) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  const std::vector<LaserMessage> scans = stalled_scans(data / "aces/aces.clf.gz", "odom-reset:every=120");
-  const GraphRun run = run_graph(scans, read_relations((data / "aces/aces.relations").string()), true);
+  const GraphRun run = graph_with_restarts_every_120_s(data, "aces");
   EXPECT_LT(run.error.translation.mean, 1.5 * 0.0375);
   EXPECT_EQ(run.odometry.jumps, 11u);  // every restart
 }
@@ -177,8 +182,7 @@ TEST(OdometryStallRealData, GraphSlamPlacesOdometryRestartsFromTheLastPose) {
 // method scored 1.17-1.19 m; measured 0.0184 m.
 TEST(OdometryStallRealData, GraphSlamTellsARestartWithinTheBoundsByItsLandingOnTheOrigin) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  const std::vector<LaserMessage> scans = stalled_scans(data / "intel/intel.clf.gz", "odom-reset:every=120");
-  const GraphRun run = run_graph(scans, read_relations((data / "intel/intel.relations").string()), true);
+  const GraphRun run = graph_with_restarts_every_120_s(data, "intel");
   EXPECT_LT(run.error.translation.mean, 1.5 * 0.0197);
   EXPECT_EQ(run.odometry.jumps, 22u);  // every restart
 }

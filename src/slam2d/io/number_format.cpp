@@ -1,6 +1,5 @@
 #include "slam2d/io/number_format.hpp"
 
-#include <cctype>
 #include <cmath>
 
 #include "slam2d/io/text_input.hpp"
