@@ -8,15 +8,24 @@
 //   root.reject_unread_keys();   // ParseError at the first key nobody read
 //
 // Every read checks the type and the value (finite numbers, integers in range) and throws
-// ParseError naming the file and the line of the offending value.
+// ParseError naming the file and the line of the offending value. A config struct with a field
+// table (core/config_fields.hpp) is read whole, sections as nested maps, each number checked
+// against its range and every key not in the table refused:
+//
+//   GraphSlamConfig config;                   // the defaults, overridden by the file's keys
+//   read_config(ConfigNode::load("configs/graph.yaml").at("graph"), config);
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <string_view>
+#include <type_traits>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/error.hpp"
 
 namespace slam2d {
@@ -91,5 +100,75 @@ class ConfigNode {
   ConfigNode child(const std::string& key) const;
   std::shared_ptr<Impl> impl_;
 };
+
+/// The field table visitor behind read_config(): each field present in the node is read and
+/// checked against its range (ParseError at the value's line), sections recurse into nested maps.
+class ConfigReader {
+ public:
+  explicit ConfigReader(const ConfigNode& node) : node_(node) {}
+
+  template <typename Number>
+  void number(std::string_view name, Number& value, std::string_view /*unit*/, const Range& range,
+              std::string_view /*doc*/) {
+    const std::string key(name);
+    Number read_value = value;
+    if (!read_number(key, read_value)) return;
+    if (!range.contains(static_cast<double>(read_value))) {
+      throw node_.at(key).error("'" + key + "' = " + number_text(read_value) + " is out of range (must be " +
+                                range.text() + ")");
+    }
+    value = read_value;
+  }
+  void flag(std::string_view name, bool& value, std::string_view) { node_.read(std::string(name), value); }
+  template <typename Enum>
+  void choice(std::string_view name, Enum& value, std::string_view) {
+    const std::string key(name);
+    std::string text;
+    if (!node_.read(key, text)) return;
+    for (const auto& option : choices(value)) {
+      if (option.name == text) {
+        value = option.value;
+        return;
+      }
+    }
+    throw node_.at(key).error("unknown value '" + text + "' for '" + key + "' (expected one of: " + choice_list<Enum>() + ")");
+  }
+  template <typename Section>
+  void section(std::string_view name, Section& value, std::string_view) {
+    const std::string key(name);
+    if (!node_.has(key)) return;
+    const ConfigNode child = node_.at(key);
+    if (!child.is_map()) throw child.error("'" + key + "' must be a map of settings");
+    ConfigReader inner(child);
+    describe(inner, value);
+    child.reject_unread_keys();
+  }
+
+ private:
+  bool read_number(const std::string& key, double& value) const { return node_.read(key, value); }
+  bool read_number(const std::string& key, int& value) const { return node_.read(key, value); }
+  template <typename Unsigned>
+    requires std::is_unsigned_v<Unsigned>
+  bool read_number(const std::string& key, Unsigned& value) const {
+    std::uint64_t wide = value;
+    if (!node_.read(key, wide)) return false;
+    if (wide > std::numeric_limits<Unsigned>::max()) throw node_.at(key).error("'" + key + "' is too large");
+    value = static_cast<Unsigned>(wide);
+    return true;
+  }
+  const ConfigNode& node_;
+};
+
+/// Reads the keys of `node` (a map; a null node reads nothing) into `config` by its field table;
+/// fields not in the node keep their value. ParseError, at its line, on a key not in the table,
+/// a wrong type or a value out of range.
+template <typename Config>
+void read_config(const ConfigNode& node, Config& config) {
+  if (node.is_null()) return;
+  if (!node.is_map()) throw node.error("expected a map of settings");
+  ConfigReader reader(node);
+  describe(reader, config);
+  node.reject_unread_keys();
+}
 
 }  // namespace slam2d

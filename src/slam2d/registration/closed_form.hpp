@@ -19,6 +19,9 @@
 #include <optional>
 #include <vector>
 
+#include <array>
+
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 
@@ -28,6 +31,9 @@ enum class PointToPointSolver {
   kSvd,         // Arun / Umeyama: SVD of the 2x2 cross-covariance
   kQuaternion,  // Besl & McKay Sec. III-C: the top eigenvector of the 4x4 matrix Q(Sigma_px)
 };
+constexpr auto choices(PointToPointSolver) {
+  return std::array{Choice{"svd", PointToPointSolver::kSvd}, Choice{"quaternion", PointToPointSolver::kQuaternion}};
+}
 
 /// The T (= T_target_source) minimising sum_i w_i |T source_points[i] - target_points[i]|^2,
 /// by SVD. `weights` (>= 0, positive sum) default to 1. The point lists must have the same,

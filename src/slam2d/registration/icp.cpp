@@ -113,19 +113,7 @@ struct IcpBuffers {
 
 }  // namespace
 
-void validate(const IcpConfig& config) {
-  check(config.max_iterations >= 1, "icp: max_iterations must be >= 1");
-  check(config.max_correspondence_distance > 0.0, "icp: max_correspondence_distance must be > 0");
-  check(config.min_correspondences >= 3, "icp: min_correspondences must be >= 3");
-  check(config.solver == PointToPointSolver::kSvd || config.solver == PointToPointSolver::kQuaternion,
-        "icp: unknown solver");
-  check(config.min_mse_change >= 0.0, "icp: min_mse_change must be >= 0");
-  check(config.min_translation_step >= 0.0, "icp: min_translation_step must be >= 0");
-  check(config.min_rotation_step >= 0.0, "icp: min_rotation_step must be >= 0");
-  check(config.acceleration_angle > 0.0 && config.acceleration_angle < std::numbers::pi,
-        "icp: acceleration_angle must be in (0, pi)");
-  check(config.acceleration_max_factor > 0.0, "icp: acceleration_max_factor must be > 0");
-}
+void validate(const IcpConfig& config) { check_fields(config, "IcpConfig"); }
 
 MatchResult match_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                       const IcpConfig& config) {

@@ -30,6 +30,22 @@ struct IcpConfig {
   double acceleration_max_factor = 25.0;    // 1, > 0; extrapolation capped at this times the last step (paper: 25)
 };
 
+template <typename Fields>
+void describe(Fields& f, IcpConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "registrations before giving up");
+  f.number("max_correspondence_distance", c.max_correspondence_distance, "m", greater_than(0), "pairs farther apart are rejected");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs and the match fails");
+  f.choice("solver", c.solver, "closed-form registration (same answer)");
+  f.number("min_mse_change", c.min_mse_change, "m^2", at_least(0), "stop when the MSE changes by less (Besl's tau)");
+  f.number("min_translation_step", c.min_translation_step, "m", at_least(0), "stop when a step moves less than this ...");
+  f.number("min_rotation_step", c.min_rotation_step, "rad", at_least(0), "... and turns less than this");
+  f.flag("accelerated", c.accelerated, "Besl & McKay's accelerated ICP (Sec. IV-E)");
+  f.number("acceleration_angle", c.acceleration_angle, "rad", open_interval(0, 3.141592653589793),
+           "steps within this angle are aligned (paper: 10 deg)");
+  f.number("acceleration_max_factor", c.acceleration_max_factor, "1", greater_than(0),
+           "extrapolation capped at this times the last step (paper: 25)");
+}
+
 /// Throws Error when a field is out of its range.
 void validate(const IcpConfig& config);
 
