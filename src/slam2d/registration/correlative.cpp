@@ -511,32 +511,14 @@ void check_inputs(const PointCloud2& source, const SE2& guess) {
 }  // namespace
 
 void validate(const CorrelativeConfig& config) {
+  check_fields(config, "CorrelativeConfig");
   validate(CorrelativeGridConfig{.resolution = config.resolution,
                                  .sigma = config.sigma,
                                  .truncation = config.truncation,
                                  .max_segment_length = config.max_segment_length,
                                  .levels = 1});
-  check(config.levels >= 0 && config.levels <= 16,
-        "CorrelativeConfig: levels must lie in [0, 16] (0: automatic), got " + std::to_string(config.levels));
-  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  check(non_negative(config.window_x) && non_negative(config.window_y),
-        "CorrelativeConfig: window_x and window_y must be finite and >= 0 (m)");
-  check(non_negative(config.window_theta) && config.window_theta <= std::numbers::pi,
-        "CorrelativeConfig: window_theta must lie in [0, pi] (rad)");
-  check(non_negative(config.linear_step), "CorrelativeConfig: linear_step must be finite and >= 0 (m)");
-  check(non_negative(config.angular_step), "CorrelativeConfig: angular_step must be finite and >= 0 (rad)");
-  check(config.search == CorrelativeSearch::kExhaustive || config.search == CorrelativeSearch::kMultiResolution ||
-            config.search == CorrelativeSearch::kBranchAndBound,
-        "CorrelativeConfig: unknown search mode");
-  check(config.low_resolution_steps >= 2 && config.low_resolution_steps <= (1 << 15) &&
-            std::has_single_bit(static_cast<unsigned>(config.low_resolution_steps)),
-        "CorrelativeConfig: low_resolution_steps must be a power of two in [2, 2^15], got " +
-            std::to_string(config.low_resolution_steps));
-  check(config.min_score >= 0.0 && config.min_score <= 1.0, "CorrelativeConfig: min_score must lie in [0, 1]");
-  check(config.covariance_radius >= 0 && config.covariance_radius <= 50,
-        "CorrelativeConfig: covariance_radius must lie in [0, 50] (steps)");
-  check(config.min_eigenvalue_ratio > 0.0 && config.min_eigenvalue_ratio < 1.0,
-        "CorrelativeConfig: min_eigenvalue_ratio must lie in (0, 1)");
+  check(std::has_single_bit(static_cast<unsigned>(config.low_resolution_steps)),
+        "CorrelativeConfig: low_resolution_steps must be a power of two, got " + std::to_string(config.low_resolution_steps));
 }
 
 CorrelativeGridConfig correlative_grid_config(const CorrelativeConfig& config) {

@@ -34,6 +34,7 @@
 // come from analyze_degeneracy (degeneracy.hpp) with each inlier paired to its nearest target
 // point (the target's normals): the Fisher information of the scene's geometry.
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/correlative_grid.hpp"
@@ -46,27 +47,49 @@ enum class CorrelativeSearch {
   kMultiResolution,  // low-resolution voxels, then full resolution in order of bound (Olson Sec. IV)
   kBranchAndBound,   // a quadtree of max-pooled bounds, depth first (Hess 2016 Sec. V)
 };
+constexpr auto choices(CorrelativeSearch) {
+  return std::array{Choice{"exhaustive", CorrelativeSearch::kExhaustive}, Choice{"multi_resolution", CorrelativeSearch::kMultiResolution}, Choice{"branch_and_bound", CorrelativeSearch::kBranchAndBound}};
+}
 
 struct CorrelativeConfig {
   // The lookup table, for the overload that builds it from the target cloud (a prebuilt grid
   // carries its own): see CorrelativeGridConfig.
-  double resolution = 0.03;         // m per cell, > 0 (Olson: 0.03)
-  double sigma = 0.03;              // m, > 0
-  double truncation = 3.0;          // sigmas, > 0
-  double max_segment_length = 0.0;  // m, >= 0 (0: points only)
-  int levels = 0;                   // 1, in [0, 16]; 0: as many as the window and search need
+  double resolution = 0.03;
+  double sigma = 0.03;
+  double truncation = 3.0;
+  double max_segment_length = 0.0;
+  int levels = 0;
   // The window around the guess (half-widths):
-  double window_x = 0.3;       // m, >= 0
-  double window_y = 0.3;       // m, >= 0
-  double window_theta = 0.35;  // rad, in [0, pi]
-  double linear_step = 0.0;    // m, >= 0; 0: the grid's resolution; else a whole multiple of it
-  double angular_step = 0.0;   // rad, >= 0; 0: the farthest source point moves at most one linear step
+  double window_x = 0.3;
+  double window_y = 0.3;
+  double window_theta = 0.35;
+  double linear_step = 0.0;
+  double angular_step = 0.0;
   CorrelativeSearch search = CorrelativeSearch::kBranchAndBound;
-  int low_resolution_steps = 16;  // linear steps per side of a multi-resolution voxel, a power of two in [2, 2^15]
-  double min_score = 0.3;         // 1, in [0, 1]: normalised score below which the match has not converged
-  int covariance_radius = 16;     // steps, in [0, 50]: farthest the covariance box grows from the best pose (fast searches)
-  double min_eigenvalue_ratio = 0.01;  // 1, in (0, 1): degeneracy threshold (DegeneracyConfig)
+  int low_resolution_steps = 16;
+  double min_score = 0.3;
+  int covariance_radius = 16;
+  double min_eigenvalue_ratio = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, CorrelativeConfig& c) {
+  f.number("resolution", c.resolution, "m per cell", greater_than(0), "the lookup table built from the target cloud (Olson: 0.03)");
+  f.number("sigma", c.sigma, "m", greater_than(0), "standard deviation of a point's distance to its target point");
+  f.number("truncation", c.truncation, "sigmas", greater_than(0), "the log-likelihood is floored at d_max = truncation * sigma");
+  f.number("max_segment_length", c.max_segment_length, "m", at_least(0), "target points closer than this are joined by a segment (0: points only)");
+  f.number("levels", c.levels, "1", between(0, 16), "max-pooled table levels; 0: as many as the window and search need");
+  f.number("window_x", c.window_x, "m", at_least(0), "half-width of the search window around the guess");
+  f.number("window_y", c.window_y, "m", at_least(0), "");
+  f.number("window_theta", c.window_theta, "rad", between(0, std::numbers::pi), "");
+  f.number("linear_step", c.linear_step, "m", at_least(0), "0: the grid's resolution; else a whole multiple of it");
+  f.number("angular_step", c.angular_step, "rad", at_least(0), "0: the farthest source point moves at most one linear step");
+  f.choice("search", c.search, "every pose (Olson III-C), low-resolution voxels first (Olson IV), or branch and bound (Hess 2016)");
+  f.number("low_resolution_steps", c.low_resolution_steps, "steps", between(2, 1 << 15), "linear steps per side of a multi-resolution voxel, a power of two");
+  f.number("min_score", c.min_score, "1", between(0, 1), "normalised score below which the match has not converged");
+  f.number("covariance_radius", c.covariance_radius, "steps", between(0, 50), "farthest the covariance box grows from the best pose (fast searches)");
+  f.number("min_eigenvalue_ratio", c.min_eigenvalue_ratio, "1", open_interval(0, 1), "degeneracy threshold (DegeneracyConfig)");
+}
 
 /// The lookup-table part of a matcher configuration, with `levels` resolved (0: the levels the
 /// window and search need).

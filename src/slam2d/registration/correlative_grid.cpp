@@ -56,15 +56,7 @@ void check_cloud(const PointCloud2& cloud) {
 }  // namespace
 
 void validate(const CorrelativeGridConfig& config) {
-  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  check(positive(config.resolution), "CorrelativeGridConfig: resolution must be finite and positive (m)");
-  check(positive(config.sigma), "CorrelativeGridConfig: sigma must be finite and positive (m)");
-  check(positive(config.truncation), "CorrelativeGridConfig: truncation must be finite and positive (sigmas)");
-  check(std::isfinite(config.max_segment_length) && config.max_segment_length >= 0.0,
-        "CorrelativeGridConfig: max_segment_length must be finite and >= 0 (m)");
-  check(config.levels >= 1 && config.levels <= 16,
-        "CorrelativeGridConfig: levels must lie in [1, 16], got " + std::to_string(config.levels));
-  check(std::isfinite(config.margin) && config.margin >= 0.0, "CorrelativeGridConfig: margin must be finite and >= 0 (m)");
+  check_fields(config, "CorrelativeGridConfig");
   check(config.margin / config.resolution <= 1e5, "CorrelativeGridConfig: margin spans more than 10^5 cells");
   check(config.truncation * config.sigma / config.resolution <= 1e4,
         "CorrelativeGridConfig: the kernel radius truncation * sigma spans more than 10^4 cells");

@@ -26,6 +26,7 @@
 #include <memory>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/grid/grid_geometry.hpp"
 
@@ -37,15 +38,25 @@ class KdTree2;
 inline constexpr int kMaxCellScore = 255;
 
 struct CorrelativeGridConfig {
-  double resolution = 0.03;         // m per cell, > 0 (Olson: 0.03 m)
-  double sigma = 0.03;              // m, > 0: standard deviation of a point's distance to its target point
-  double truncation = 3.0;          // sigmas, > 0: the log-likelihood is floored at d_max = truncation * sigma
-  double max_segment_length = 0.0;  // m, >= 0: consecutive target points closer than this are joined by a
-                                    // segment, whose distance counts too (0: points only, as Olson)
-  int levels = 8;                   // 1, in [1, 16]: max-pooled levels 0 .. levels - 1 (level k pools 2^k cells)
-  double margin = 0.0;              // m, >= 0: zero cells stored beyond the kernel around the target, so that a
-                                    // search window reaching that far past the target reads cells directly
+  double resolution = 0.03;
+  double sigma = 0.03;
+  double truncation = 3.0;
+  double max_segment_length = 0.0;
+  int levels = 8;
+  double margin = 0.0;
 };
+
+template <typename Fields>
+void describe(Fields& f, CorrelativeGridConfig& c) {
+  f.number("resolution", c.resolution, "m per cell", greater_than(0), "(Olson: 0.03 m)");
+  f.number("sigma", c.sigma, "m", greater_than(0), "standard deviation of a point's distance to its target point");
+  f.number("truncation", c.truncation, "sigmas", greater_than(0), "the log-likelihood is floored at d_max = truncation * sigma");
+  f.number("max_segment_length", c.max_segment_length, "m", at_least(0),
+           "consecutive target points closer than this are joined by a segment, whose distance counts too (0: points only, as Olson)");
+  f.number("levels", c.levels, "1", between(1, 16), "max-pooled levels 0 .. levels - 1 (level k pools 2^k cells)");
+  f.number("margin", c.margin, "m", at_least(0),
+           "zero cells stored beyond the kernel around the target, so that a search window reaching that far past the target reads cells directly");
+}
 
 class CorrelativeGrid {
  public:

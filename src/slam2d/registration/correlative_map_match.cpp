@@ -9,18 +9,9 @@
 namespace slam2d {
 
 void validate(const MapMatchConfig& config) {
+  check_fields(config, "MapMatchConfig");
   validate(config.correlative);
   validate(config.refinement);
-  check(std::isfinite(config.max_refinement_shift) && config.max_refinement_shift >= 0.0,
-        "scan-to-map: max_refinement_shift must be >= 0");
-  check(std::isfinite(config.min_sigma_translation) && config.min_sigma_translation > 0.0,
-        "scan-to-map: min_sigma_translation must be > 0");
-  check(std::isfinite(config.min_sigma_rotation) && config.min_sigma_rotation > 0.0,
-        "scan-to-map: min_sigma_rotation must be > 0");
-  check(std::isfinite(config.inlier_distance) && config.inlier_distance > 0.0, "scan-to-map: inlier_distance must be > 0");
-  check(std::isfinite(config.map_voxel) && config.map_voxel >= 0.0, "scan-to-map: map_voxel must be >= 0");
-  check(config.min_score_at_window_edge >= 0.0 && config.min_score_at_window_edge <= 1.0,
-        "scan-to-map: min_score_at_window_edge must be in [0, 1]");
 }
 
 namespace {

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
@@ -26,17 +27,31 @@ struct MapMatchConfig {
   // Coarse is enough: the refinement does the fine work, the search only has to land in its basin.
   CorrelativeConfig correlative{.resolution = 0.05, .sigma = 0.05, .window_x = 0.2, .window_y = 0.2,
                                 .window_theta = 0.2, .angular_step = 0.004, .min_score = 0.3};
-  bool refine = true;                     // point-to-line refinement of the correlative pose
+  bool refine = true;
   PointToPlaneConfig refinement{.max_correspondence_distance = 0.15};
-  double max_refinement_shift = 0.1;      // m, >= 0: a refinement farther from the correlative pose is discarded
-  double min_sigma_translation = 0.005;   // m, > 0: floor of the constraint's standard deviations
-  double min_sigma_rotation = 0.002;      // rad, > 0
-  double inlier_distance = 0.1;           // m, > 0: a scan point this near a map point counts in inlier_fraction
-  double map_voxel = 0.02;                // m, >= 0: map points are thinned to one per voxel (0: all)
+  double max_refinement_shift = 0.1;
+  double min_sigma_translation = 0.005;
+  double min_sigma_rotation = 0.002;
+  double inlier_distance = 0.1;
+  double map_voxel = 0.02;
   // A best pose on the window's edge (a corridor's axis, where the response is flat) is kept when
   // this fraction of the scan lies on the map; its covariance then shows the flat direction.
-  double min_score_at_window_edge = 0.8;  // 1, in [0, 1]; 1 never keeps one
+  double min_score_at_window_edge = 0.8;
 };
+
+template <typename Fields>
+void describe(Fields& f, MapMatchConfig& c) {
+  f.section("correlative", c.correlative, "the search (coarse is enough: the refinement does the fine work)");
+  f.flag("refine", c.refine, "point-to-line refinement of the correlative pose");
+  f.section("refinement", c.refinement, "the refinement's point-to-line ICP");
+  f.number("max_refinement_shift", c.max_refinement_shift, "m", at_least(0), "a refinement farther from the correlative pose is discarded");
+  f.number("min_sigma_translation", c.min_sigma_translation, "m", greater_than(0), "floor of the constraint's standard deviations");
+  f.number("min_sigma_rotation", c.min_sigma_rotation, "rad", greater_than(0), "");
+  f.number("inlier_distance", c.inlier_distance, "m", greater_than(0), "a scan point this near a map point counts in inlier_fraction");
+  f.number("map_voxel", c.map_voxel, "m", at_least(0), "map points are thinned to one per voxel (0: all)");
+  f.number("min_score_at_window_edge", c.min_score_at_window_edge, "1", between(0, 1),
+           "a best pose on the window's edge (a corridor's axis) is kept when this fraction of the scan lies on the map; 1 never keeps one");
+}
 
 struct MapMatchResult {
   SE2 T_map_robot;                                   // the estimate (the guess when not converged)

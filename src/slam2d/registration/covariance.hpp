@@ -11,10 +11,12 @@
 //   residual variance (sum of squared residuals / (n - 3)). Cheap; it assumes the residuals are
 //   independent noise, which overconfident associations violate.
 
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
@@ -38,6 +40,9 @@ enum class ErrorMetric {
   kPointToPoint,  // |T p - q|^2
   kPointToLine,   // (n^T (T p - q))^2
 };
+constexpr auto choices(ErrorMetric) {
+  return std::array{Choice{"point_to_point", ErrorMetric::kPointToPoint}, Choice{"point_to_line", ErrorMetric::kPointToLine}};
+}
 
 struct SensorNoise {
   double range_sigma = 0.01;  // m, standard deviation of a range reading

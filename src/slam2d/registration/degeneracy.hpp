@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/covariance.hpp"
@@ -21,9 +22,15 @@
 namespace slam2d {
 
 struct DegeneracyConfig {
-  double min_eigenvalue_ratio = 0.01;  // 1, smallest over largest scaled eigenvalue below which the match is degenerate
-  double range_sigma = 0.01;           // m, sensor noise that scales the information
+  double min_eigenvalue_ratio = 0.01;
+  double range_sigma = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, DegeneracyConfig& c) {
+  f.number("min_eigenvalue_ratio", c.min_eigenvalue_ratio, "1", open_interval(0, 1), "smallest over largest scaled eigenvalue below which the match is degenerate");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "sensor noise that scales the information");
+}
 
 struct DegeneracyAnalysis {
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // Fisher information in (x, y, theta): 1/m^2, 1/(m rad), 1/rad^2

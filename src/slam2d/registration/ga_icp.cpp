@@ -130,25 +130,8 @@ MatchResult failed_match(const SE2& guess) {
 }  // namespace
 
 void validate(const GaIcpConfig& c) {
-  check(std::isfinite(c.window_x) && c.window_x > 0.0, "GA-ICP: window_x must be > 0 (m)");
-  check(std::isfinite(c.window_y) && c.window_y > 0.0, "GA-ICP: window_y must be > 0 (m)");
-  check(c.window_theta > 0.0 && c.window_theta <= std::numbers::pi, "GA-ICP: window_theta must be in (0, pi] (rad)");
-  check(c.bits_per_gene >= 2 && c.bits_per_gene <= 20, "GA-ICP: bits_per_gene must be in [2, 20]");
-  check(c.population >= 2, "GA-ICP: population must be >= 2");
-  check(c.generations >= 1, "GA-ICP: generations must be >= 1");
-  check(c.crossover_rate >= 0.0 && c.crossover_rate <= 1.0, "GA-ICP: crossover_rate must be in [0, 1]");
-  check(c.mutation_rate >= 0.0 && c.mutation_rate <= 1.0, "GA-ICP: mutation_rate must be in [0, 1]");
-  check(c.elite >= 0 && c.elite < c.population, "GA-ICP: elite must be in [0, population)");
-  check(c.tournament_size >= 1, "GA-ICP: tournament_size must be >= 1");
-  check(std::isfinite(c.max_range_difference) && c.max_range_difference > 0.0,
-        "GA-ICP: max_range_difference must be > 0 (m)");
-  check(c.min_overlap >= 0.0 && c.min_overlap <= 1.0, "GA-ICP: min_overlap must be in [0, 1]");
-  check(std::isfinite(c.angular_resolution) && c.angular_resolution >= 0.0,
-        "GA-ICP: angular_resolution must be >= 0 (rad; 0 infers it)");
-  check(c.icp_max_iterations >= 1, "GA-ICP: icp_max_iterations must be >= 1");
-  check(std::isfinite(c.icp_max_correspondence_distance) && c.icp_max_correspondence_distance > 0.0,
-        "GA-ICP: icp_max_correspondence_distance must be > 0 (m)");
-  check(c.icp_min_correspondences >= 3, "GA-ICP: icp_min_correspondences must be >= 3");
+  check_fields(c, "GaIcpConfig");
+  check(c.elite < c.population, "GaIcpConfig: elite must be < population");
 }
 
 Eigen::Vector3d decode_chromosome(std::uint64_t chromosome, const GaIcpConfig& config) {

@@ -27,12 +27,14 @@
 // MatchResult: the ICP stage's estimate, covariance (Censi, point-to-point), residual, inliers
 // and degeneracy; `iterations` = GA generations + ICP iterations; `converged` is the ICP's.
 
+#include <numbers>
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/match_result.hpp"
@@ -41,27 +43,48 @@ namespace slam2d {
 
 struct GaIcpConfig {
   // Search window around the guess (the odometry error bounds), Eq. (1).
-  double window_x = 0.5;      // m, half-width of the x offset, > 0
-  double window_y = 0.5;      // m, half-width of the y offset, > 0
-  double window_theta = 0.35;  // rad, half-width of the heading offset, in (0, pi]
-  int bits_per_gene = 6;      // 1, bits of each of the three genes, in [2, 20]
+  double window_x = 0.5;
+  double window_y = 0.5;
+  double window_theta = 0.35;
+  int bits_per_gene = 6;
   // Genetic algorithm.
-  int population = 40;          // 1, chromosomes per generation, >= 2
-  int generations = 25;         // 1, >= 1
-  double crossover_rate = 0.8;  // 1, probability that a selected couple is crossed, in [0, 1]
-  double mutation_rate = 0.03;  // 1, probability that a bit flips, in [0, 1]
-  int elite = 2;                // 1, best chromosomes copied unchanged, in [0, population)
-  int tournament_size = 3;      // 1, chromosomes drawn per selection, >= 1
-  std::uint64_t seed = 1;       // the random stream
+  int population = 40;
+  int generations = 25;
+  double crossover_rate = 0.8;
+  double mutation_rate = 0.03;
+  int elite = 2;
+  int tournament_size = 3;
+  std::uint64_t seed = 1;
   // Fitness, Eq. (2)-(3).
-  double max_range_difference = 0.5;  // m, c: a beam's range difference is clipped here, > 0
-  double min_overlap = 0.3;           // 1, overlapping beams over source beams below which a pose is infeasible, in [0, 1]
-  double angular_resolution = 0.0;    // rad, the source's beam spacing, >= 0 (0: inferred from the points)
+  double max_range_difference = 0.5;
+  double min_overlap = 0.3;
+  double angular_resolution = 0.0;
   // ICP refinement (match_icp, point-to-point).
-  int icp_max_iterations = 50;                   // 1, >= 1
-  double icp_max_correspondence_distance = 1.0;  // m, > 0 (match_icp's default)
-  int icp_min_correspondences = 10;              // 1, >= 3
+  int icp_max_iterations = 50;
+  double icp_max_correspondence_distance = 1.0;
+  int icp_min_correspondences = 10;
 };
+
+template <typename Fields>
+void describe(Fields& f, GaIcpConfig& c) {
+  f.number("window_x", c.window_x, "m", greater_than(0), "half-width of the x offset of the search window around the guess, Eq. (1)");
+  f.number("window_y", c.window_y, "m", greater_than(0), "half-width of the y offset");
+  f.number("window_theta", c.window_theta, "rad", open_closed(0, std::numbers::pi), "half-width of the heading offset");
+  f.number("bits_per_gene", c.bits_per_gene, "1", between(2, 20), "bits of each of the three genes");
+  f.number("population", c.population, "1", at_least(2), "chromosomes per generation");
+  f.number("generations", c.generations, "1", at_least(1), "");
+  f.number("crossover_rate", c.crossover_rate, "1", between(0, 1), "probability that a selected couple is crossed");
+  f.number("mutation_rate", c.mutation_rate, "1", between(0, 1), "probability that a bit flips");
+  f.number("elite", c.elite, "1", at_least(0), "best chromosomes copied unchanged, < population");
+  f.number("tournament_size", c.tournament_size, "1", at_least(1), "chromosomes drawn per selection");
+  f.number("seed", c.seed, "1", any_value(), "the random stream");
+  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "c: a beam's range difference is clipped here, Eq. (2)-(3)");
+  f.number("min_overlap", c.min_overlap, "1", between(0, 1), "overlapping beams over source beams below which a pose is infeasible");
+  f.number("angular_resolution", c.angular_resolution, "rad", at_least(0), "the source's beam spacing (0: inferred from the points)");
+  f.number("icp_max_iterations", c.icp_max_iterations, "1", at_least(1), "the ICP refinement (match_icp, point-to-point)");
+  f.number("icp_max_correspondence_distance", c.icp_max_correspondence_distance, "m", greater_than(0), "(match_icp's default)");
+  f.number("icp_min_correspondences", c.icp_min_correspondences, "1", at_least(3), "");
+}
 
 /// Throws Error naming the first invalid field.
 void validate(const GaIcpConfig& config);

@@ -24,26 +24,6 @@ constexpr double kPi = std::numbers::pi;
 
 // ---- Configuration ----
 
-void check_common(const std::string& name, int max_iterations, double window_initial, double window_final,
-                  double window_decay, double max_range_difference, double max_gap, double translation_tolerance,
-                  double rotation_tolerance, int min_correspondences, double range_sigma) {
-  const auto require = [&](bool ok, const char* what) {
-    if (!ok) throw Error(name + ": " + what);
-  };
-  require(max_iterations >= 1, "max_iterations must be >= 1");
-  require(window_initial > 0.0 && window_initial < kPi / 2.0, "window_initial must be in (0, pi/2) rad");
-  require(window_final > 0.0 && window_final <= window_initial, "window_final must be in (0, window_initial]");
-  require(window_decay >= 0.0 && std::isfinite(window_decay), "window_decay must be finite and >= 0");
-  require(max_range_difference > 0.0 && std::isfinite(max_range_difference),
-          "max_range_difference must be finite and > 0");
-  require(max_gap > 0.0 && std::isfinite(max_gap), "max_gap must be finite and > 0");
-  require(translation_tolerance >= 0.0 && std::isfinite(translation_tolerance),
-          "translation_tolerance must be finite and >= 0");
-  require(rotation_tolerance >= 0.0 && std::isfinite(rotation_tolerance), "rotation_tolerance must be finite and >= 0");
-  require(min_correspondences >= 3, "min_correspondences must be >= 3");
-  require(range_sigma > 0.0 && std::isfinite(range_sigma), "range_sigma must be finite and > 0");
-}
-
 // Eq. (6): an exponentially shrinking bound with a floor.
 double shrinking(double initial, double final_value, double decay, int iteration) {
   return std::max(final_value, initial * std::exp(-decay * iteration));
@@ -508,21 +488,14 @@ std::vector<std::optional<PolylinePoint>> matching_range_points(const ScanPolyli
 // ---- Public building blocks ----
 
 void validate(const ImrpConfig& c) {
-  check_common("imrp", c.max_iterations, c.window_initial, c.window_final, c.window_decay, c.max_range_difference,
-               c.max_gap, c.translation_tolerance, c.rotation_tolerance, c.min_correspondences, c.range_sigma);
-  check(c.final_max_distance > 0.0 && std::isfinite(c.final_max_distance),
-        "imrp: final_max_distance must be finite and > 0");
+  check_fields(c, "ImrpConfig");
+  check(c.window_final <= c.window_initial, "ImrpConfig: window_final must be <= window_initial");
 }
 
 void validate(const IdcConfig& c) {
-  check_common("idc", c.max_iterations, c.window_initial, c.window_final, c.window_decay, c.max_range_difference,
-               c.max_gap, c.translation_tolerance, c.rotation_tolerance, c.min_correspondences, c.range_sigma);
-  check(c.max_distance_initial > 0.0 && std::isfinite(c.max_distance_initial),
-        "idc: max_distance_initial must be finite and > 0");
-  check(c.max_distance_final > 0.0 && c.max_distance_final <= c.max_distance_initial,
-        "idc: max_distance_final must be in (0, max_distance_initial]");
-  check(c.max_distance_decay >= 0.0 && std::isfinite(c.max_distance_decay),
-        "idc: max_distance_decay must be finite and >= 0");
+  check_fields(c, "IdcConfig");
+  check(c.window_final <= c.window_initial, "IdcConfig: window_final must be <= window_initial");
+  check(c.max_distance_final <= c.max_distance_initial, "IdcConfig: max_distance_final must be <= max_distance_initial");
 }
 
 std::optional<SE2> fit_rigid_motion(const std::vector<Point2>& a, const std::vector<Point2>& b,

@@ -44,10 +44,12 @@
 // the same pairs against normals fitted over 7 points along the target: two-point segment
 // normals of a noisy scan would lend a corridor information along its axis).
 
+#include <numbers>
 #include <cstddef>
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/covariance.hpp"
@@ -56,34 +58,66 @@
 namespace slam2d {
 
 struct ImrpConfig {
-  int max_iterations = 60;               // 1, >= 1
-  double window_initial = 0.35;          // rad, B_r(0), in (0, pi/2)
-  double window_final = 0.02;            // rad, the floor of B_r, in (0, window_initial]
-  double window_decay = 0.15;            // 1/iteration, alpha in Eq. (6), >= 0
-  double max_range_difference = 0.1;     // m, range-rule pairs whose ranges differ more are dropped, > 0
-  double max_gap = 0.5;                  // m, polylines break between consecutive points farther apart, > 0
-  double final_max_distance = 0.3;       // m, closest-point threshold at the estimate (result statistics), > 0
-  double translation_tolerance = 1e-4;   // m, converged when a step moves the source sensor less, >= 0
-  double rotation_tolerance = 1e-5;      // rad, and turns it less, >= 0
-  int min_correspondences = 6;           // 1, fewer pairs end the match unconverged, >= 3
-  double range_sigma = 0.01;             // m, range noise for the covariance, > 0
+  int max_iterations = 60;
+  double window_initial = 0.35;
+  double window_final = 0.02;
+  double window_decay = 0.15;
+  double max_range_difference = 0.1;
+  double max_gap = 0.5;
+  double final_max_distance = 0.3;
+  double translation_tolerance = 1e-4;
+  double rotation_tolerance = 1e-5;
+  int min_correspondences = 6;
+  double range_sigma = 0.01;
 };
 
+template <typename Fields>
+void describe(Fields& f, ImrpConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "");
+  f.number("window_initial", c.window_initial, "rad", open_interval(0, std::numbers::pi / 2), "B_r(0), the range rule's initial window");
+  f.number("window_final", c.window_final, "rad", greater_than(0), "the floor of B_r, <= window_initial");
+  f.number("window_decay", c.window_decay, "1/iteration", at_least(0), "alpha in Eq. (6)");
+  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "range-rule pairs whose ranges differ more are dropped");
+  f.number("max_gap", c.max_gap, "m", greater_than(0), "polylines break between consecutive points farther apart");
+  f.number("final_max_distance", c.final_max_distance, "m", greater_than(0), "closest-point threshold at the estimate (result statistics)");
+  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
+  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs end the match unconverged");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+}
+
 struct IdcConfig {
-  int max_iterations = 40;               // 1, >= 1
-  double window_initial = 0.35;          // rad, range-rule window B_r(0), in (0, pi/2)
-  double window_final = 0.02;            // rad, the floor of B_r, in (0, window_initial]
-  double window_decay = 0.15;            // 1/iteration, alpha of the window, Eq. (6), >= 0
-  double max_distance_initial = 1.0;     // m, closest-point threshold at t = 0, > 0
-  double max_distance_final = 0.2;       // m, its floor, in (0, max_distance_initial]
-  double max_distance_decay = 0.15;      // 1/iteration, alpha of the threshold, >= 0
-  double max_range_difference = 0.1;     // m, range-rule pairs whose ranges differ more are dropped, > 0
-  double max_gap = 0.5;                  // m, polylines break between consecutive points farther apart, > 0
-  double translation_tolerance = 1e-4;   // m, converged when a step moves the source sensor less, >= 0
-  double rotation_tolerance = 1e-5;      // rad, and turns it less, >= 0
-  int min_correspondences = 6;           // 1, fewer pairs (of either rule) end the match unconverged, >= 3
-  double range_sigma = 0.01;             // m, range noise for the covariance, > 0
+  int max_iterations = 40;
+  double window_initial = 0.35;
+  double window_final = 0.02;
+  double window_decay = 0.15;
+  double max_distance_initial = 1.0;
+  double max_distance_final = 0.2;
+  double max_distance_decay = 0.15;
+  double max_range_difference = 0.1;
+  double max_gap = 0.5;
+  double translation_tolerance = 1e-4;
+  double rotation_tolerance = 1e-5;
+  int min_correspondences = 6;
+  double range_sigma = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, IdcConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "");
+  f.number("window_initial", c.window_initial, "rad", open_interval(0, std::numbers::pi / 2), "range-rule window B_r(0)");
+  f.number("window_final", c.window_final, "rad", greater_than(0), "the floor of B_r, <= window_initial");
+  f.number("window_decay", c.window_decay, "1/iteration", at_least(0), "alpha of the window, Eq. (6)");
+  f.number("max_distance_initial", c.max_distance_initial, "m", greater_than(0), "closest-point threshold at t = 0");
+  f.number("max_distance_final", c.max_distance_final, "m", greater_than(0), "its floor, <= max_distance_initial");
+  f.number("max_distance_decay", c.max_distance_decay, "1/iteration", at_least(0), "alpha of the threshold");
+  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "range-rule pairs whose ranges differ more are dropped");
+  f.number("max_gap", c.max_gap, "m", greater_than(0), "polylines break between consecutive points farther apart");
+  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
+  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs (of either rule) end the match unconverged");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+}
 
 /// Throw Error naming the first invalid field.
 void validate(const ImrpConfig& config);

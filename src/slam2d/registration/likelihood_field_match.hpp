@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/likelihood_field.hpp"
 #include "slam2d/registration/degeneracy.hpp"
@@ -30,14 +31,25 @@
 namespace slam2d {
 
 struct LikelihoodFieldMatchConfig {
-  int max_iterations = 30;        // 1, >= 1
-  double outlier_distance = 0.5;  // m, > 0: points farther from an obstacle do not count
-  double inlier_distance = 0.2;   // m, > 0: points this close after the match are inliers
-  double sigma = 0.05;            // m, > 0: floor of the per-point residual sigma of the covariance
-  double epsilon_xy = 1e-3;       // m: stop when the step is below this ...
-  double epsilon_theta = 1e-3;    // rad: ... and this
-  DegeneracyConfig degeneracy{};  // the verdict on the fit's information (MatchResult::degenerate)
+  int max_iterations = 30;
+  double outlier_distance = 0.5;
+  double inlier_distance = 0.2;
+  double sigma = 0.05;
+  double epsilon_xy = 1e-3;
+  double epsilon_theta = 1e-3;
+  DegeneracyConfig degeneracy{};
 };
+
+template <typename Fields>
+void describe(Fields& f, LikelihoodFieldMatchConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "");
+  f.number("outlier_distance", c.outlier_distance, "m", greater_than(0), "points farther from an obstacle do not count");
+  f.number("inlier_distance", c.inlier_distance, "m", greater_than(0), "points this close after the match are inliers");
+  f.number("sigma", c.sigma, "m", greater_than(0), "floor of the per-point residual sigma of the covariance");
+  f.number("epsilon_xy", c.epsilon_xy, "m", at_least(0), "stop when the step is below this ...");
+  f.number("epsilon_theta", c.epsilon_theta, "rad", at_least(0), "... and this");
+  f.section("degeneracy", c.degeneracy, "the verdict on the fit's information (MatchResult::degenerate)");
+}
 
 /// T_target_source is T_map_robot (the guess when the match fails); converged: the step became
 /// small with >= 3 points; residual: the RMS distance of the points used (m).

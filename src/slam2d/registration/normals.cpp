@@ -10,9 +10,7 @@ namespace slam2d {
 namespace {
 
 void validate(const NormalEstimationConfig& config) {
-  check(config.neighbors >= 2, "normal estimation: neighbors must be >= 2");
-  check(config.min_neighbors >= 2, "normal estimation: min_neighbors must be >= 2");
-  check(config.max_neighbor_distance > 0.0, "normal estimation: max_neighbor_distance must be > 0");
+  check_fields(config, "NormalEstimationConfig");
 }
 
 // Running sums of the points of one line fit.

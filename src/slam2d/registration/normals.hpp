@@ -7,6 +7,7 @@
 
 #include <cstddef>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 
 namespace slam2d {
@@ -14,10 +15,17 @@ namespace slam2d {
 class KdTree2;
 
 struct NormalEstimationConfig {
-  int neighbors = 5;                   // k nearest points (the point itself included), >= 2
-  double max_neighbor_distance = 0.5;  // m, farther neighbours are left out of the fit
-  int min_neighbors = 3;               // points in the fit (itself included) below which the normal is zero, >= 2
+  int neighbors = 5;
+  double max_neighbor_distance = 0.5;
+  int min_neighbors = 3;
 };
+
+template <typename Fields>
+void describe(Fields& f, NormalEstimationConfig& c) {
+  f.number("neighbors", c.neighbors, "1", at_least(2), "k nearest points in a fit (the point itself included)");
+  f.number("max_neighbor_distance", c.max_neighbor_distance, "m", greater_than(0), "farther neighbours are left out of the fit");
+  f.number("min_neighbors", c.min_neighbors, "1", at_least(2), "points in the fit (itself included) below which the normal is zero");
+}
 
 /// Normals from the k nearest neighbours (any cloud, ordered or not); sets cloud.normals.
 void estimate_normals(PointCloud2& cloud, const NormalEstimationConfig& config = {});

@@ -17,6 +17,7 @@
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
@@ -50,6 +51,23 @@ struct HectorMatcherConfig {
   // instead of following the map's weak, possibly wrong pull. 0 disables it (Hector).
   double degeneracy_ratio = 0.0;       // 1, in [0, 1)
 };
+
+template <typename Fields>
+void describe(Fields& f, HectorMatcherConfig& c) {
+  f.number("coarse_iterations", c.coarse_iterations, "1", at_least(1), "Gauss-Newton steps on every level but the finest (Hector: 3)");
+  f.number("fine_iterations", c.fine_iterations, "1", at_least(1), "Gauss-Newton steps on the finest level (Hector: 5)");
+  f.number("max_rotation_step", c.max_rotation_step, "rad", greater_than(0), "clamp on |d psi| per step (Hector: 0.2)");
+  f.number("max_translation_step", c.max_translation_step, "cells of the level", greater_than(0),
+           "clamp on |d p| per step (the bilinear gradient reaches about a cell from a wall: longer steps are extrapolation)");
+  f.number("convergence_step", c.convergence_step, "m and rad", at_least(0), "a level stops when the step is smaller");
+  f.number("max_step_halvings", c.max_step_halvings, "1", at_least(0), "a step that raises the cost is halved up to this often, else dropped");
+  f.section("kernel", c.kernel, "on r = 1 - M; none is the paper's plain least squares");
+  f.number("rotation_search_range", c.rotation_search_range, "rad", at_least(0), "multi-start on the coarsest level over the guess rotated by k * step (0: off)");
+  f.number("rotation_search_step", c.rotation_search_step, "rad", greater_than(0), "");
+  f.number("rotation_search_margin", c.rotation_search_margin, "1", closed_open(0, 1), "relative cost drop a rotated start needs to win");
+  f.number("degeneracy_ratio", c.degeneracy_ratio, "1", closed_open(0, 1),
+           "solution remapping (Zhang et al. 2016): steps projected onto the scan's eigenvectors above this fraction of the largest (0: off)");
+}
 
 struct HectorMatchResult {
   SE2 T_map_robot;                // the estimate

@@ -604,23 +604,7 @@ std::optional<SE2> minimize_point_to_line(const PointToLineProblem& problem) {
 }
 
 void validate(const PlIcpConfig& config) {
-  check(config.max_iterations >= 1, "pl-icp: max_iterations must be >= 1");
-  check(config.epsilon_xy >= 0.0 && std::isfinite(config.epsilon_xy), "pl-icp: epsilon_xy must be >= 0");
-  check(config.epsilon_theta >= 0.0 && std::isfinite(config.epsilon_theta), "pl-icp: epsilon_theta must be >= 0");
-  check(config.max_correspondence_distance > 0.0 && std::isfinite(config.max_correspondence_distance),
-        "pl-icp: max_correspondence_distance must be > 0");
-  check(config.max_segment_length > 0.0 && !std::isnan(config.max_segment_length),
-        "pl-icp: max_segment_length must be > 0");
-  check(config.outliers_max_fraction > 0.0 && config.outliers_max_fraction <= 1.0,
-        "pl-icp: outliers_max_fraction must be in (0, 1]");
-  check(config.outliers_adaptive_order > 0.0 && config.outliers_adaptive_order <= 1.0,
-        "pl-icp: outliers_adaptive_order must be in (0, 1]");
-  check(config.outliers_adaptive_mult > 0.0 && !std::isnan(config.outliers_adaptive_mult),
-        "pl-icp: outliers_adaptive_mult must be > 0");
-  check(config.search == PlIcpSearch::kProjective || config.search == PlIcpSearch::kKdTree,
-        "pl-icp: unknown search");
-  check(config.min_correspondences >= 3, "pl-icp: min_correspondences must be >= 3");
-  check(config.range_sigma > 0.0 && std::isfinite(config.range_sigma), "pl-icp: range_sigma must be > 0");
+  check_fields(config, "PlIcpConfig");
 }
 
 std::vector<Correspondence> pl_icp_correspondences(const PointCloud2& target, const PointCloud2& source,

@@ -31,12 +31,14 @@
 // other target point is at least c away from where the point was searched), which keeps j1
 // without any search while the point has drifted less than c - |p - p_j1| since.
 
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/covariance.hpp"
@@ -48,21 +50,40 @@ enum class PlIcpSearch {
   kProjective,  // Censi's ordered-scan search with jump tables (clouds in beam order)
   kKdTree,      // nearest neighbour by kd-tree (any cloud order)
 };
+constexpr auto choices(PlIcpSearch) {
+  return std::array{Choice{"projective", PlIcpSearch::kProjective}, Choice{"kdtree", PlIcpSearch::kKdTree}};
+}
 
 struct PlIcpConfig {
-  int max_iterations = 50;                   // 1, >= 1 (CSM sm2: 1000; converges in ~10)
-  double epsilon_xy = 1e-4;                  // m, >= 0: stop when the step's translation is below this ...
-  double epsilon_theta = 1e-4;               // rad, >= 0: ... and its rotation below this (CSM: 1e-4, 1e-4)
-  double max_correspondence_distance = 0.5;  // m, > 0: j1 farther than this from p_i^w gives no pair
-  double max_segment_length = 1.0;           // m, > 0: pairs whose segment ends j1, j2 lie farther apart are dropped
-  double outliers_max_fraction = 0.95;       // 1, in (0, 1]: trim all but this best fraction (CSM outliers_maxPerc)
-  double outliers_adaptive_order = 0.7;      // 1, in (0, 1]: quantile of the adaptive threshold (CSM: 0.7)
-  double outliers_adaptive_mult = 2.0;       // 1, > 0: adaptive threshold = mult * that quantile (CSM: 2)
-  bool outliers_remove_doubles = true;       // of source points sharing a j1, keep only the closest (CSM: true)
+  int max_iterations = 50;
+  double epsilon_xy = 1e-4;
+  double epsilon_theta = 1e-4;
+  double max_correspondence_distance = 0.5;
+  double max_segment_length = 1.0;
+  double outliers_max_fraction = 0.95;
+  double outliers_adaptive_order = 0.7;
+  double outliers_adaptive_mult = 2.0;
+  bool outliers_remove_doubles = true;
   PlIcpSearch search = PlIcpSearch::kProjective;
-  int min_correspondences = 10;              // 1, >= 3: fewer pairs and the match fails
-  double range_sigma = 0.01;                 // m, > 0: range noise for the covariance (Censi 2007)
+  int min_correspondences = 10;
+  double range_sigma = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, PlIcpConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "(CSM sm2: 1000; converges in ~10)");
+  f.number("epsilon_xy", c.epsilon_xy, "m", at_least(0), "stop when the step's translation is below this ...");
+  f.number("epsilon_theta", c.epsilon_theta, "rad", at_least(0), "... and its rotation below this (CSM: 1e-4, 1e-4)");
+  f.number("max_correspondence_distance", c.max_correspondence_distance, "m", greater_than(0), "j1 farther than this from p_i^w gives no pair");
+  f.number("max_segment_length", c.max_segment_length, "m", greater_than(0), "pairs whose segment ends j1, j2 lie farther apart are dropped");
+  f.number("outliers_max_fraction", c.outliers_max_fraction, "1", open_closed(0, 1), "trim all but this best fraction (CSM outliers_maxPerc)");
+  f.number("outliers_adaptive_order", c.outliers_adaptive_order, "1", open_closed(0, 1), "quantile of the adaptive threshold (CSM: 0.7)");
+  f.number("outliers_adaptive_mult", c.outliers_adaptive_mult, "1", greater_than(0), "adaptive threshold = mult * that quantile (CSM: 2)");
+  f.flag("outliers_remove_doubles", c.outliers_remove_doubles, "of source points sharing a j1, keep only the closest (CSM: true)");
+  f.choice("search", c.search, "correspondence search: Censi's projective one (clouds in beam order) or a kd-tree");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs and the match fails");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance (Censi 2007)");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const PlIcpConfig& config);

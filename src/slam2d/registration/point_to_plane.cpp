@@ -34,14 +34,7 @@ void associate(const KdTree2& tree, const PointCloud2& model, const PointCloud2&
 }  // namespace
 
 void validate(const PointToPlaneConfig& config) {
-  check(config.max_iterations >= 1, "point-to-plane: max_iterations must be >= 1");
-  check(config.max_correspondence_distance > 0.0, "point-to-plane: max_correspondence_distance must be > 0");
-  check(config.min_correspondences >= 3, "point-to-plane: min_correspondences must be >= 3");
-  check(config.min_translation_step >= 0.0, "point-to-plane: min_translation_step must be >= 0");
-  check(config.min_rotation_step >= 0.0, "point-to-plane: min_rotation_step must be >= 0");
-  check(config.normal_neighbors >= 2, "point-to-plane: normal_neighbors must be >= 2");
-  check(config.normal_max_distance > 0.0, "point-to-plane: normal_max_distance must be > 0");
-  check(config.normal_min_neighbors >= 2, "point-to-plane: normal_min_neighbors must be >= 2");
+  check_fields(config, "PointToPlaneConfig");
 }
 
 MatchResult match_point_to_plane(const PointCloud2& target, const PointCloud2& source,

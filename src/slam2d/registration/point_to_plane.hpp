@@ -9,6 +9,7 @@
 //
 // Preset: configs/point-to-plane.yaml. Method page: docs/methods/icp.md.
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/match_result.hpp"
@@ -18,15 +19,28 @@ namespace slam2d {
 class KdTree2;
 
 struct PointToPlaneConfig {
-  int max_iterations = 30;                   // 1, >= 1; linear solves before giving up
-  double max_correspondence_distance = 0.3;  // m, > 0; pairs farther apart are rejected (at 1 m surfaces one scan does not see pull the tests' pairs 2.4 cm off)
-  int min_correspondences = 10;              // 1, >= 3; fewer pairs and the match fails
-  double min_translation_step = 1e-4;        // m, >= 0; stop when an increment moves less than this ...
-  double min_rotation_step = 1e-4;           // rad, >= 0; ... and turns less than this
-  int normal_neighbors = 5;                  // 1, >= 2; k of the kNN normal fit when the target has no normals
-  double normal_max_distance = 0.5;          // m, > 0; neighbours farther away stay out of the fit
-  int normal_min_neighbors = 3;              // 1, >= 2; fewer fitted points and the target point has no normal
+  int max_iterations = 30;
+  double max_correspondence_distance = 0.3;
+  int min_correspondences = 10;
+  double min_translation_step = 1e-4;
+  double min_rotation_step = 1e-4;
+  int normal_neighbors = 5;
+  double normal_max_distance = 0.5;
+  int normal_min_neighbors = 3;
 };
+
+template <typename Fields>
+void describe(Fields& f, PointToPlaneConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "linear solves before giving up");
+  f.number("max_correspondence_distance", c.max_correspondence_distance, "m", greater_than(0),
+           "pairs farther apart are rejected (at 1 m, surfaces one scan does not see pull the tests' pairs 2.4 cm off)");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs and the match fails");
+  f.number("min_translation_step", c.min_translation_step, "m", at_least(0), "stop when an increment moves less than this ...");
+  f.number("min_rotation_step", c.min_rotation_step, "rad", at_least(0), "... and turns less than this");
+  f.number("normal_neighbors", c.normal_neighbors, "1", at_least(2), "k of the kNN normal fit when the target has no normals");
+  f.number("normal_max_distance", c.normal_max_distance, "m", greater_than(0), "neighbours farther away stay out of the fit");
+  f.number("normal_min_neighbors", c.normal_min_neighbors, "1", at_least(2), "fewer fitted points and the target point has no normal");
+}
 
 /// Throws Error when a field is out of its range.
 void validate(const PointToPlaneConfig& config);

@@ -11,26 +11,10 @@
 #include "slam2d/core/odometry.hpp"
 
 namespace slam2d {
-namespace {
-
-bool finite_at_least(double value, double minimum) { return std::isfinite(value) && value >= minimum; }
-
-}  // namespace
 
 void validate(const ScanOdometryConfig& config) {
-  check(finite_at_least(config.keyframe_distance, 0.0), "scan odometry: keyframe_distance must be >= 0");
-  check(finite_at_least(config.keyframe_angle, 0.0), "scan odometry: keyframe_angle must be >= 0");
-  check(finite_at_least(config.min_range, 0.0), "scan odometry: min_range must be >= 0");
-  check(config.max_range > config.min_range && !std::isnan(config.max_range),
-        "scan odometry: max_range must be > min_range");
-  check(config.max_guess_dt > 0.0 && !std::isnan(config.max_guess_dt), "scan odometry: max_guess_dt must be > 0");
-  check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0,
-        "scan odometry: min_inlier_fraction must be in [0, 1]");
-  check(config.max_residual > 0.0 && !std::isnan(config.max_residual), "scan odometry: max_residual must be > 0");
-  check(config.max_correction_distance > 0.0 && !std::isnan(config.max_correction_distance),
-        "scan odometry: max_correction_distance must be > 0");
-  check(config.max_correction_angle > 0.0 && !std::isnan(config.max_correction_angle),
-        "scan odometry: max_correction_angle must be > 0");
+  check_fields(config, "ScanOdometryConfig");
+  check(config.max_range > config.min_range, "ScanOdometryConfig: max_range must be > min_range");
 }
 
 ScanOdometry::ScanOdometry(Matcher matcher, const ScanOdometryConfig& config)

@@ -29,6 +29,7 @@
 #include <functional>
 #include <optional>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/point_cloud.hpp"
@@ -39,24 +40,38 @@
 namespace slam2d {
 
 struct ScanOdometryConfig {
-  double keyframe_distance = 0.1;          // m, >= 0: new keyframe once |t| from it reaches this (0: every scan)
-  double keyframe_angle = 0.17453292519943295;  // rad, >= 0 (10 deg): ... or |theta| reaches this (0: every scan)
-  double min_range = 0.0;                  // m, >= 0: readings below are dropped
-  double max_range = 30.0;                 // m, > min_range: readings at or beyond are dropped (a SICK
-                                           // LMS is reliable to ~30 m, and logs report no-return as a
-                                           // far reading: 50 m in ACES)
-  double max_guess_dt = 1.0;               // s, > 0: no constant-velocity extrapolation over longer gaps
-  bool require_convergence = true;         // gate: the matcher must report converged
-  double min_inlier_fraction = 0.3;        // 1, in [0, 1]: gate on inliers / usable points of the scan
-  double max_residual = 0.1;               // m, > 0: gate on the matcher's RMS residual
-  double max_correction_distance = 0.5;    // m, > 0: gate on |t| of guess^-1 * result (CSM ROS: 0.5)
-  double max_correction_angle = 0.5;       // rad, > 0: gate on |theta| of guess^-1 * result
+  double keyframe_distance = 0.1;
+  double keyframe_angle = 0.17453292519943295;
+  double min_range = 0.0;
+  double max_range = 30.0;
+  double max_guess_dt = 1.0;
+  bool require_convergence = true;
+  double min_inlier_fraction = 0.3;
+  double max_residual = 0.1;
+  double max_correction_distance = 0.5;
+  double max_correction_angle = 0.5;
   // Each odometry increment is checked first (core/odometry_guard.hpp); a scan whose increment is
   // not trusted (a stall, a jump) is predicted by constant velocity, and its estimated motion
   // replaces the increment in the odometry the next predictions start from; a catch-up is
   // applied from the scan where the odometry last moved.
   OdometryGuardConfig odometry_guard{};
 };
+
+template <typename Fields>
+void describe(Fields& f, ScanOdometryConfig& c) {
+  f.number("keyframe_distance", c.keyframe_distance, "m", at_least(0), "new keyframe once |t| from it reaches this (0: every scan)");
+  f.number("keyframe_angle", c.keyframe_angle, "rad", at_least(0), "... or |theta| reaches this (10 deg; 0: every scan)");
+  f.number("min_range", c.min_range, "m", at_least(0), "readings below are dropped");
+  f.number("max_range", c.max_range, "m", greater_than(0),
+           "> min_range; readings at or beyond are dropped (a SICK LMS is reliable to ~30 m, and logs report no-return as a far reading: 50 m in ACES)");
+  f.number("max_guess_dt", c.max_guess_dt, "s", greater_than(0), "no constant-velocity extrapolation over longer gaps");
+  f.flag("require_convergence", c.require_convergence, "gate: the matcher must report converged");
+  f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "gate on inliers / usable points of the scan");
+  f.number("max_residual", c.max_residual, "m", greater_than(0), "gate on the matcher's RMS residual");
+  f.number("max_correction_distance", c.max_correction_distance, "m", greater_than(0), "gate on |t| of guess^-1 * result (CSM ROS: 0.5)");
+  f.number("max_correction_angle", c.max_correction_angle, "rad", greater_than(0), "gate on |theta| of guess^-1 * result");
+  f.section("odometry_guard", c.odometry_guard, "which odometry increments are trusted (core/odometry_guard.hpp)");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const ScanOdometryConfig& config);

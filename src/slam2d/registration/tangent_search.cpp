@@ -177,28 +177,8 @@ void finish(const PointCloud2& target, const PointCloud2& source, const TangentP
 }  // namespace
 
 void validate(const TangentSearchConfig& c) {
-  const auto require = [](bool ok, const char* what) {
-    if (!ok) throw Error(std::string("tangent-search: ") + what);
-  };
-  const auto finite_positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  const auto finite_non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  require(c.tangent_neighbors >= 3, "tangent_neighbors must be >= 3");
-  require(finite_positive(c.tangent_max_distance), "tangent_max_distance must be finite and > 0");
-  require(c.histogram_bins >= 8, "histogram_bins must be >= 8");
-  require(finite_positive(c.histogram_sigma), "histogram_sigma must be finite and > 0");
-  require(c.max_rotation >= 0.0 && c.max_rotation < kPi / 2.0, "max_rotation must be in [0, pi/2) rad");
-  require(c.max_iterations >= 1, "max_iterations must be >= 1");
-  require(finite_positive(c.max_distance_initial), "max_distance_initial must be finite and > 0");
-  require(c.max_distance_final > 0.0 && c.max_distance_final <= c.max_distance_initial,
-          "max_distance_final must be in (0, max_distance_initial]");
-  require(finite_non_negative(c.max_distance_decay), "max_distance_decay must be finite and >= 0");
-  require(c.max_tangent_difference > 0.0 && c.max_tangent_difference <= kPi / 2.0,
-          "max_tangent_difference must be in (0, pi/2] rad");
-  require(finite_positive(c.rotation_search_width), "rotation_search_width must be finite and > 0");
-  require(finite_non_negative(c.translation_tolerance), "translation_tolerance must be finite and >= 0");
-  require(finite_non_negative(c.rotation_tolerance), "rotation_tolerance must be finite and >= 0");
-  require(c.min_correspondences >= 3, "min_correspondences must be >= 3");
-  require(finite_positive(c.range_sigma), "range_sigma must be finite and > 0");
+  check_fields(c, "TangentSearchConfig");
+  check(c.max_distance_final <= c.max_distance_initial, "TangentSearchConfig: max_distance_final must be <= max_distance_initial");
 }
 
 void read_fields(const ConfigNode& node, TangentSearchConfig& config) {

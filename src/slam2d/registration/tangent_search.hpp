@@ -27,6 +27,7 @@
 // the metric of Eq. (2)) give the inliers, the residual (RMS of Eq. (2)'s terms), the covariance
 // (censi_covariance, kPointToLine) and the degeneracy verdict.
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/io/config_file.hpp"
@@ -35,22 +36,41 @@
 namespace slam2d {
 
 struct TangentSearchConfig {
-  int tangent_neighbors = 7;              // 1, points of each tangent line fit along the scan (itself included), >= 3
-  double tangent_max_distance = 0.5;      // m, neighbours farther from the point are left out of its fit, > 0
-  int histogram_bins = 180;               // 1, bins of the tangent-direction histograms over pi, >= 8
-  double histogram_sigma = 0.02;          // rad, Gaussian smoothing of the histograms, > 0
-  double max_rotation = 0.7;              // rad, the rotation search of Eq. (1) spans w_guess +- this, [0, pi/2)
-  int max_iterations = 30;                // 1, least-squares iterations, >= 1
-  double max_distance_initial = 1.0;      // m, pairing threshold D(0), > 0
-  double max_distance_final = 0.2;        // m, its floor, in (0, max_distance_initial]
-  double max_distance_decay = 0.15;       // 1/iteration, alpha of D(k) = max(D_final, D(0) exp(-alpha k)), >= 0
-  double max_tangent_difference = 0.3;    // rad, paired points' tangents differ at most this (modulo pi), in (0, pi/2]
-  double rotation_search_width = 0.05;    // rad, half-width of the per-iteration search of Eq. (4), > 0
-  double translation_tolerance = 1e-4;    // m, converged when a step moves the source sensor less, >= 0
-  double rotation_tolerance = 1e-5;       // rad, and turns it less, >= 0
-  int min_correspondences = 6;            // 1, fewer pairs end the match unconverged, >= 3
-  double range_sigma = 0.01;              // m, range noise for the covariance, > 0
+  int tangent_neighbors = 7;
+  double tangent_max_distance = 0.5;
+  int histogram_bins = 180;
+  double histogram_sigma = 0.02;
+  double max_rotation = 0.7;
+  int max_iterations = 30;
+  double max_distance_initial = 1.0;
+  double max_distance_final = 0.2;
+  double max_distance_decay = 0.15;
+  double max_tangent_difference = 0.3;
+  double rotation_search_width = 0.05;
+  double translation_tolerance = 1e-4;
+  double rotation_tolerance = 1e-5;
+  int min_correspondences = 6;
+  double range_sigma = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, TangentSearchConfig& c) {
+  f.number("tangent_neighbors", c.tangent_neighbors, "1", at_least(3), "points of each tangent line fit along the scan (itself included)");
+  f.number("tangent_max_distance", c.tangent_max_distance, "m", greater_than(0), "neighbours farther from the point are left out of its fit");
+  f.number("histogram_bins", c.histogram_bins, "1", at_least(8), "bins of the tangent-direction histograms over pi");
+  f.number("histogram_sigma", c.histogram_sigma, "rad", greater_than(0), "Gaussian smoothing of the histograms");
+  f.number("max_rotation", c.max_rotation, "rad", closed_open(0, std::numbers::pi / 2), "the rotation search of Eq. (1) spans w_guess +- this");
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "least-squares iterations");
+  f.number("max_distance_initial", c.max_distance_initial, "m", greater_than(0), "pairing threshold D(0)");
+  f.number("max_distance_final", c.max_distance_final, "m", greater_than(0), "its floor, <= max_distance_initial");
+  f.number("max_distance_decay", c.max_distance_decay, "1/iteration", at_least(0), "alpha of D(k) = max(D_final, D(0) exp(-alpha k))");
+  f.number("max_tangent_difference", c.max_tangent_difference, "rad", open_closed(0, std::numbers::pi / 2), "paired points' tangents differ at most this (modulo pi)");
+  f.number("rotation_search_width", c.rotation_search_width, "rad", greater_than(0), "half-width of the per-iteration search of Eq. (4)");
+  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
+  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs end the match unconverged");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+}
 
 /// Throws Error naming the first invalid field.
 void validate(const TangentSearchConfig& config);

@@ -103,18 +103,7 @@ bool trimmed_mse_settled(double mse, double previous_mse, const TrimmedIcpConfig
 }  // namespace
 
 void validate(const TrimmedIcpConfig& config) {
-  check(config.overlap >= 0.0 && config.overlap <= 1.0, "trimmed icp: overlap must be in (0, 1], or 0 to estimate it");
-  check(config.min_overlap > 0.0 && config.min_overlap <= 1.0, "trimmed icp: min_overlap must be in (0, 1]");
-  check(config.lambda > 0.0 && std::isfinite(config.lambda), "trimmed icp: lambda must be > 0");
-  check(config.max_iterations >= 1, "trimmed icp: max_iterations must be >= 1");
-  check(config.min_trimmed_mse >= 0.0, "trimmed icp: min_trimmed_mse must be >= 0");
-  check(config.min_relative_change >= 0.0, "trimmed icp: min_relative_change must be >= 0");
-  check(config.min_correspondences >= 3, "trimmed icp: min_correspondences must be >= 3");
-  check(config.solver == PointToPointSolver::kSvd || config.solver == PointToPointSolver::kQuaternion,
-        "trimmed icp: unknown solver");
-  check(config.overlap_estimation == OverlapEstimation::kAtConvergence ||
-            config.overlap_estimation == OverlapEstimation::kPerIteration,
-        "trimmed icp: unknown overlap_estimation");
+  check_fields(config, "TrimmedIcpConfig");
 }
 
 std::size_t trimmed_pair_count(const std::vector<double>& sorted_squared_distances, double min_overlap,

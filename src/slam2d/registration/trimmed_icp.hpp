@@ -18,9 +18,11 @@
 //
 // Preset: configs/trimmed-icp.yaml. Method page: docs/methods/icp.md.
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/closed_form.hpp"
@@ -32,18 +34,34 @@ enum class OverlapEstimation {
   kAtConvergence,  // psi minimised where the iteration has converged for the current xi
   kPerIteration,   // psi minimised at every iteration
 };
+constexpr auto choices(OverlapEstimation) {
+  return std::array{Choice{"at_convergence", OverlapEstimation::kAtConvergence}, Choice{"per_iteration", OverlapEstimation::kPerIteration}};
+}
 
 struct TrimmedIcpConfig {
-  double overlap = 0.0;                // 1, in (0, 1], the fraction xi of source points kept; 0 = estimate it
-  double min_overlap = 0.4;            // 1, in (0, 1]; lower end of the xi search when estimated
-  double lambda = 2.0;                 // 1, > 0; exponent of psi(xi) = e / xi^(1 + lambda) (paper: 2)
-  OverlapEstimation overlap_estimation = OverlapEstimation::kAtConvergence;  // when overlap = 0
-  int max_iterations = 300;            // 1, >= 1; registrations before giving up (N_iter; 0.3 m off takes ~150)
-  double min_trimmed_mse = 1e-12;      // m^2, >= 0; stop when the trimmed MSE e falls below
-  double min_relative_change = 1e-6;   // 1, >= 0; stop when |e' - e| / e falls below
-  int min_correspondences = 10;        // 1, >= 3; fewer kept pairs and the match fails
-  PointToPointSolver solver = PointToPointSolver::kSvd;  // kSvd | kQuaternion
+  double overlap = 0.0;
+  double min_overlap = 0.4;
+  double lambda = 2.0;
+  OverlapEstimation overlap_estimation = OverlapEstimation::kAtConvergence;
+  int max_iterations = 300;
+  double min_trimmed_mse = 1e-12;
+  double min_relative_change = 1e-6;
+  int min_correspondences = 10;
+  PointToPointSolver solver = PointToPointSolver::kSvd;
 };
+
+template <typename Fields>
+void describe(Fields& f, TrimmedIcpConfig& c) {
+  f.number("overlap", c.overlap, "1", between(0, 1), "the fraction xi of source points kept; 0 = estimate it");
+  f.number("min_overlap", c.min_overlap, "1", open_closed(0, 1), "lower end of the xi search when estimated");
+  f.number("lambda", c.lambda, "1", greater_than(0), "exponent of psi(xi) = e / xi^(1 + lambda) (paper: 2)");
+  f.choice("overlap_estimation", c.overlap_estimation, "when psi is minimised, with overlap = 0");
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "registrations before giving up (N_iter; 0.3 m off takes ~150)");
+  f.number("min_trimmed_mse", c.min_trimmed_mse, "m^2", at_least(0), "stop when the trimmed MSE e falls below");
+  f.number("min_relative_change", c.min_relative_change, "1", at_least(0), "stop when |e' - e| / e falls below");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer kept pairs and the match fails");
+  f.choice("solver", c.solver, "closed-form registration (same answer)");
+}
 
 /// Throws Error when a field is out of its range.
 void validate(const TrimmedIcpConfig& config);

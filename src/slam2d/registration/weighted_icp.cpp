@@ -199,24 +199,7 @@ bool usable_count(const std::vector<Pair>& pairs, const WeightedIcpConfig& confi
 }  // namespace
 
 void validate(const WeightedIcpConfig& c) {
-  check(c.select_every >= 1, "weighted ICP: select_every must be >= 1");
-  check(std::isfinite(c.weight_distance) && c.weight_distance > 0.0, "weighted ICP: weight_distance must be > 0 (m)");
-  check(std::isfinite(c.max_correspondence_distance) && c.max_correspondence_distance > 0.0,
-        "weighted ICP: max_correspondence_distance must be > 0 (m)");
-  check(std::isfinite(c.reject_sigma_factor) && c.reject_sigma_factor >= 0.0,
-        "weighted ICP: reject_sigma_factor must be >= 0 (0: off)");
-  check(c.max_normal_angle >= 0.0 && c.max_normal_angle <= std::numbers::pi,
-        "weighted ICP: max_normal_angle must be in [0, pi] rad (0: off)");
-  check(c.normal_neighbors >= 3, "weighted ICP: normal_neighbors must be >= 3");
-  check(std::isfinite(c.normal_max_distance) && c.normal_max_distance > 0.0,
-        "weighted ICP: normal_max_distance must be > 0 (m)");
-  check(c.max_iterations >= 1, "weighted ICP: max_iterations must be >= 1");
-  check(std::isfinite(c.translation_tolerance) && c.translation_tolerance >= 0.0,
-        "weighted ICP: translation_tolerance must be >= 0 (m)");
-  check(std::isfinite(c.rotation_tolerance) && c.rotation_tolerance >= 0.0,
-        "weighted ICP: rotation_tolerance must be >= 0 (rad)");
-  check(c.min_correspondences >= 3, "weighted ICP: min_correspondences must be >= 3");
-  check(std::isfinite(c.range_sigma) && c.range_sigma > 0.0, "weighted ICP: range_sigma must be > 0 (m)");
+  check_fields(c, "WeightedIcpConfig");
 }
 
 double pair_weight(double distance, const WeightedIcpConfig& config) {

@@ -24,10 +24,13 @@
 // degeneracy analysis uses the target's normals (fitted to the k nearest neighbours when absent,
 // normals.hpp).
 
+#include <numbers>
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/covariance.hpp"
@@ -39,35 +42,60 @@ enum class IcpWeighting {
   kBoolean,  // w in {0, 1}: the pair is in or out, Eq. (1)
   kSoft,     // w in [0, 1], decreasing with the pair distance, Eq. (2)
 };
+constexpr auto choices(IcpWeighting) {
+  return std::array{Choice{"boolean", IcpWeighting::kBoolean}, Choice{"soft", IcpWeighting::kSoft}};
+}
 
 enum class SoftWeightKernel {
   kLinear,    // w = max(0, 1 - d / d_w): Rusinkiewicz & Levoy's "linear" weighting
   kGaussian,  // w = exp(-d^2 / (2 d_w^2))
   kCauchy,    // w = 1 / (1 + (d / d_w)^2)
 };
+constexpr auto choices(SoftWeightKernel) {
+  return std::array{Choice{"linear", SoftWeightKernel::kLinear}, Choice{"gaussian", SoftWeightKernel::kGaussian}, Choice{"cauchy", SoftWeightKernel::kCauchy}};
+}
 
 struct WeightedIcpConfig {
-  IcpWeighting weighting = IcpWeighting::kBoolean;  // Boolean or soft (match_boolean_icp / match_soft_icp force it)
+  IcpWeighting weighting = IcpWeighting::kBoolean;
   // 1. select
-  int select_every = 1;  // 1, every k-th source point is used, >= 1
+  int select_every = 1;
   // 3. weight
-  double weight_distance = 0.3;                       // m, d_w: the Boolean threshold and the soft kernel's scale, > 0
-  SoftWeightKernel soft_kernel = SoftWeightKernel::kLinear;  // the soft weight's shape
+  double weight_distance = 0.3;
+  SoftWeightKernel soft_kernel = SoftWeightKernel::kLinear;
   // 4. reject
-  double max_correspondence_distance = 1.0;  // m, d_max: farther pairs are rejected, > 0
-  double reject_sigma_factor = 0.0;          // 1, k: reject d > mean + k std of the kept distances, >= 0 (0: off)
-  double max_normal_angle = 0.0;             // rad, reject pairs whose normals differ more, in [0, pi] (0: off)
+  double max_correspondence_distance = 1.0;
+  double reject_sigma_factor = 0.0;
+  double max_normal_angle = 0.0;
   // 5. error metric
-  ErrorMetric metric = ErrorMetric::kPointToPoint;  // point-to-point or point-to-line (target normals)
-  int normal_neighbors = 5;             // 1, k nearest points (itself included) in a normal fit, >= 3
-  double normal_max_distance = 0.5;     // m, neighbours farther are left out of a normal fit, > 0
+  ErrorMetric metric = ErrorMetric::kPointToPoint;
+  int normal_neighbors = 5;
+  double normal_max_distance = 0.5;
   // 6. minimise, stop
-  int max_iterations = 50;              // 1, >= 1
-  double translation_tolerance = 1e-4;  // m, converged when an update moves less, >= 0
-  double rotation_tolerance = 1e-4;     // rad, ... and turns less, >= 0
-  int min_correspondences = 10;         // 1, fewer pairs with w > 0 is a failure, >= 3
-  double range_sigma = 0.01;            // m, range noise for Censi's covariance, > 0
+  int max_iterations = 50;
+  double translation_tolerance = 1e-4;
+  double rotation_tolerance = 1e-4;
+  int min_correspondences = 10;
+  double range_sigma = 0.01;
 };
+
+template <typename Fields>
+void describe(Fields& f, WeightedIcpConfig& c) {
+  f.choice("weighting", c.weighting, "Boolean or soft (match_boolean_icp / match_soft_icp force it)");
+  f.number("select_every", c.select_every, "1", at_least(1), "1. select: every k-th source point is used");
+  f.number("weight_distance", c.weight_distance, "m", greater_than(0), "3. weight: d_w, the Boolean threshold and the soft kernel's scale");
+  f.choice("soft_kernel", c.soft_kernel, "the soft weight's shape");
+  f.number("max_correspondence_distance", c.max_correspondence_distance, "m", greater_than(0), "4. reject: d_max, farther pairs are rejected");
+  f.number("reject_sigma_factor", c.reject_sigma_factor, "1", at_least(0), "k: reject d > mean + k std of the kept distances (0: off)");
+  f.number("max_normal_angle", c.max_normal_angle, "rad", between(0, std::numbers::pi), "reject pairs whose normals differ more (0: off)");
+  f.choice("metric", c.metric, "5. error metric: point-to-point or point-to-line (target normals)");
+  f.number("normal_neighbors", c.normal_neighbors, "1", at_least(3), "k nearest points (itself included) in a normal fit");
+  f.number("normal_max_distance", c.normal_max_distance, "m", greater_than(0), "neighbours farther are left out of a normal fit");
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "6. minimise, stop");
+  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when an update moves less ...");
+  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns less");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs with w > 0 is a failure");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for Censi's covariance");
+}
 
 /// Throws Error naming the first invalid field.
 void validate(const WeightedIcpConfig& config);
