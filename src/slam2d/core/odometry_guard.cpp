@@ -7,32 +7,9 @@
 
 namespace slam2d {
 
-namespace {
-
-bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
-bool positive(double value) { return std::isfinite(value) && value > 0.0; }
-
-}  // namespace
-
 void validate(const OdometryGuardConfig& config) {
-  check(non_negative(config.frozen_translation) && non_negative(config.frozen_rotation),
-        "OdometryGuardConfig: frozen_translation and frozen_rotation must be finite and >= 0");
-  check(non_negative(config.moving_translation) && non_negative(config.moving_rotation),
-        "OdometryGuardConfig: moving_translation and moving_rotation must be finite and >= 0");
-  check(positive(config.max_speed) && positive(config.max_turn_rate),
-        "OdometryGuardConfig: max_speed and max_turn_rate must be finite and > 0");
-  check(non_negative(config.jump_translation_slack) && non_negative(config.jump_rotation_slack),
-        "OdometryGuardConfig: jump slacks must be finite and >= 0");
-  check(positive(config.min_time_step), "OdometryGuardConfig: min_time_step must be finite and > 0");
-  check(positive(config.gap), "OdometryGuardConfig: gap must be finite and > 0");
-  check(non_negative(config.restart_translation) && non_negative(config.restart_rotation),
-        "OdometryGuardConfig: restart_translation and restart_rotation must be finite and >= 0");
-  check(non_negative(config.stall_duration), "OdometryGuardConfig: stall_duration must be finite and >= 0");
-  check(non_negative(config.max_held_stall), "OdometryGuardConfig: max_held_stall must be finite and >= 0");
-  check(positive(config.startup_acceleration) && positive(config.startup_angular_acceleration),
-        "OdometryGuardConfig: startup_acceleration and startup_angular_acceleration must be finite and > 0");
-  check(std::isfinite(config.max_startup_time) && config.max_startup_time >= config.min_time_step,
-        "OdometryGuardConfig: max_startup_time must be finite and >= min_time_step");
+  check_fields(config, "OdometryGuardConfig");
+  check(config.max_startup_time >= config.min_time_step, "OdometryGuardConfig: max_startup_time must be >= min_time_step");
 }
 
 OdometryGuard::OdometryGuard(const OdometryGuardConfig& config) : config_(config) { validate(config_); }

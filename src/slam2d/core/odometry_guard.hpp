@@ -67,34 +67,61 @@
 #include <cstdint>
 #include <optional>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d {
 
 struct OdometryGuardConfig {
-  bool enabled = true;                  // false: every increment is trusted (the raw odometry)
-  double frozen_translation = 1e-6;     // m, >= 0: an increment this small in both parts is "frozen"
-  double frozen_rotation = 1e-6;        // rad, >= 0
-  double moving_translation = 0.01;     // m, >= 0: an increment larger than this (or the rotation
-  double moving_rotation = 0.01;        // rad, >= 0  below) means the robot was moving
-  double stall_duration = 0.25;         // s, >= 0: a frozen pose is a stall once it stood this long
-  double max_speed = 2.0;               // m/s, > 0
-  double max_turn_rate = 4.0;           // rad/s, > 0
-  double jump_translation_slack = 0.1;  // m, >= 0
-  double jump_rotation_slack = 0.2;     // rad, >= 0
-  double min_time_step = 0.1;           // s, > 0: dt used for the bounds is at least this
-  double startup_acceleration = 2.0;          // m/s^2, > 0: a robot driving off from rest
-  double startup_angular_acceleration = 4.0;  // rad/s^2, > 0
-  double max_startup_time = 0.25;             // s, >= min_time_step: the startup bound's longest dt
-  double gap = 1.0;                     // s, > 0: scans further apart are a gap
-  // m and rad, >= 0: a step onto the odometry origin (0, 0, 0) to within these, from a pose that
-  // was not there, is a restart (a jump) whatever its size.
+  bool enabled = true;
+  double frozen_translation = 1e-6;
+  double frozen_rotation = 1e-6;
+  double moving_translation = 0.01;
+  double moving_rotation = 0.01;
+  double stall_duration = 0.25;
+  double max_speed = 2.0;
+  double max_turn_rate = 4.0;
+  double jump_translation_slack = 0.1;
+  double jump_rotation_slack = 0.2;
+  double min_time_step = 0.1;
+  double startup_acceleration = 2.0;
+  double startup_angular_acceleration = 4.0;
+  double max_startup_time = 0.25;  // >= min_time_step
+  double gap = 1.0;
   double restart_translation = 1e-3;
   double restart_rotation = 1e-3;
-  // s, >= 0: a stall this young is waited out (OdometryCheck::hold_map); 0 holds nothing. 30 s of
-  // driving is about what a catch-up's odometry still brings within the matchers' reach.
+  // 30 s of driving is about what a catch-up's odometry still brings within the matchers' reach.
   double max_held_stall = 30.0;
 };
+
+template <typename Fields>
+void describe(Fields& f, OdometryGuardConfig& c) {
+  f.flag("enabled", c.enabled, "false: every increment is trusted (the raw odometry)");
+  f.number("frozen_translation", c.frozen_translation, "m", at_least(0),
+           "an increment this small in both parts is \"frozen\"");
+  f.number("frozen_rotation", c.frozen_rotation, "rad", at_least(0), "... and turning this little");
+  f.number("moving_translation", c.moving_translation, "m", at_least(0),
+           "an increment larger than this (or the rotation below) means the robot was moving");
+  f.number("moving_rotation", c.moving_rotation, "rad", at_least(0), "... or turning more than this");
+  f.number("stall_duration", c.stall_duration, "s", at_least(0), "a frozen pose is a stall once it stood this long");
+  f.number("max_speed", c.max_speed, "m/s", greater_than(0), "faster increments are jumps");
+  f.number("max_turn_rate", c.max_turn_rate, "rad/s", greater_than(0), "faster-turning increments are jumps");
+  f.number("jump_translation_slack", c.jump_translation_slack, "m", at_least(0), "added to the translation bound");
+  f.number("jump_rotation_slack", c.jump_rotation_slack, "rad", at_least(0), "added to the rotation bound");
+  f.number("min_time_step", c.min_time_step, "s", greater_than(0), "dt used for the bounds is at least this");
+  f.number("startup_acceleration", c.startup_acceleration, "m/s^2", greater_than(0), "a robot driving off from rest");
+  f.number("startup_angular_acceleration", c.startup_angular_acceleration, "rad/s^2", greater_than(0),
+           "a robot turning off from rest");
+  f.number("max_startup_time", c.max_startup_time, "s", greater_than(0),
+           "the startup bound's longest dt (>= min_time_step)");
+  f.number("gap", c.gap, "s", greater_than(0), "scans further apart are a gap");
+  f.number("restart_translation", c.restart_translation, "m", at_least(0),
+           "a step onto the odometry origin to within this (and restart_rotation), from a pose that was not "
+           "there, is a restart (a jump) whatever its size");
+  f.number("restart_rotation", c.restart_rotation, "rad", at_least(0), "see restart_translation");
+  f.number("max_held_stall", c.max_held_stall, "s", at_least(0),
+           "a stall this young is waited out (OdometryCheck::hold_map); 0 holds nothing");
+}
 
 /// Throws Error for out-of-range values.
 void validate(const OdometryGuardConfig& config);

@@ -30,17 +30,28 @@
 
 #include <cstddef>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/odometry.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d {
 
 struct ReverseOdometryRepairConfig {
-  double min_speed = 0.01;                       // m/s: |mean tv| above this is evidence of a direction
-  double min_step = 1e-3;                        // m: a forward/backward increment moves at least this
-  std::size_t min_forward_steps = 20;            // forward increments with tv > min_speed before repairing
-  std::size_t reverse_steps_to_trust_poses = 3;  // backward increments with tv < -min_speed that switch it off
+  double min_speed = 0.01;
+  double min_step = 1e-3;
+  std::size_t min_forward_steps = 20;
+  std::size_t reverse_steps_to_trust_poses = 3;
 };
+
+template <typename Fields>
+void describe(Fields& f, ReverseOdometryRepairConfig& c) {
+  f.number("min_speed", c.min_speed, "m/s", at_least(0), "|mean tv| above this is evidence of a direction");
+  f.number("min_step", c.min_step, "m", at_least(0), "a forward/backward increment moves at least this");
+  f.number("min_forward_steps", c.min_forward_steps, "1", any_value(),
+           "forward increments with tv > min_speed before repairing");
+  f.number("reverse_steps_to_trust_poses", c.reverse_steps_to_trust_poses, "1", any_value(),
+           "backward increments with tv < -min_speed that switch it off");
+}
 
 class ReverseOdometryRepair {
  public:

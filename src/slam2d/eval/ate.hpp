@@ -9,14 +9,20 @@
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/trajectory.hpp"
 
 namespace slam2d {
 
 struct AteConfig {
-  // s: each estimate pose is matched to the reference pose with the nearest stamp within this.
   double stamp_tolerance = 0.001;
 };
+
+template <typename Fields>
+void describe(Fields& f, AteConfig& c) {
+  f.number("stamp_tolerance", c.stamp_tolerance, "s", at_least(0),
+           "each estimate pose is matched to the reference pose with the nearest stamp within this");
+}
 
 struct AteResult {
   std::size_t matched = 0;     // associated pose pairs

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/eval/statistics.hpp"
 #include "slam2d/core/relation.hpp"
@@ -19,9 +20,14 @@
 namespace slam2d {
 
 struct RelationErrorConfig {
-  // s: a relation's stamps are matched to the trajectory pose with the nearest stamp within this.
   double stamp_tolerance = 0.001;
 };
+
+template <typename Fields>
+void describe(Fields& f, RelationErrorConfig& c) {
+  f.number("stamp_tolerance", c.stamp_tolerance, "s", at_least(0),
+           "a relation's stamps are matched to the trajectory pose with the nearest stamp within this");
+}
 
 /// The error of one evaluated relation.
 struct RelationError {

@@ -46,8 +46,7 @@ RpeStatistics summarise(std::span<const double> values) {
 }  // namespace
 
 RpeResult relative_pose_error(const Trajectory& estimate, const Trajectory& reference, const RpeConfig& config) {
-  check(std::isfinite(config.delta) && config.delta > 0.0,
-        "relative_pose_error: delta must be finite and > 0, got " + std::to_string(config.delta));
+  check_fields(config, "RpeConfig");
   const std::vector<AssociatedPose> pairs = associate_by_stamp(estimate, reference, config.stamp_tolerance);
   const std::vector<double> along = positions_along(pairs, config.window);
   std::vector<double> translation;

@@ -8,8 +8,10 @@
 // later pose at least `delta` further along; the error is
 // E_ij = (Ref_i^-1 Ref_j)^-1 (Est_i^-1 Est_j), summarised by |t(E)| (m) and |angle(E)| (deg).
 
+#include <array>
 #include <cstddef>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/trajectory.hpp"
 
 namespace slam2d {
@@ -18,13 +20,23 @@ enum class RpeWindow {
   kDistance,  // delta is path length (m) along the associated reference poses
   kTime,      // delta is a stamp difference (s)
 };
+constexpr auto choices(RpeWindow) {
+  return std::array{Choice{"distance", RpeWindow::kDistance}, Choice{"time", RpeWindow::kTime}};
+}
 
 struct RpeConfig {
-  RpeWindow window = RpeWindow::kDistance;  // how "further along" is measured
-  double delta = 1.0;                       // m (kDistance) or s (kTime), > 0: the window length
-  // s: each estimate pose is matched to the reference pose with the nearest stamp within this.
+  RpeWindow window = RpeWindow::kDistance;
+  double delta = 1.0;
   double stamp_tolerance = 0.001;
 };
+
+template <typename Fields>
+void describe(Fields& f, RpeConfig& c) {
+  f.choice("window", c.window, "how \"further along\" is measured: path length or time");
+  f.number("delta", c.delta, "m (distance) or s (time)", greater_than(0), "the window length");
+  f.number("stamp_tolerance", c.stamp_tolerance, "s", at_least(0),
+           "each estimate pose is matched to the reference pose with the nearest stamp within this");
+}
 
 struct RpeStatistics {
   double rmse = 0.0;

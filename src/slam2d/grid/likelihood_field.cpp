@@ -13,15 +13,7 @@ namespace slam2d {
 namespace {
 
 void validate(const LikelihoodFieldConfig& config) {
-  auto positive = [](double value) { return std::isfinite(value) && value > 0.0; };
-  check(positive(config.max_distance), "LikelihoodFieldConfig: max_distance must be finite and positive");
-  check(config.occupied_threshold >= 1 && config.occupied_threshold <= 100,
-        "LikelihoodFieldConfig: occupied_threshold must lie in [1, 100], got " +
-            std::to_string(config.occupied_threshold));
-  check(positive(config.sigma_hit), "LikelihoodFieldConfig: sigma_hit must be finite and positive");
-  check(std::isfinite(config.z_hit) && config.z_hit >= 0.0, "LikelihoodFieldConfig: z_hit must be finite and >= 0");
-  check(positive(config.z_rand), "LikelihoodFieldConfig: z_rand must be finite and positive");
-  check(positive(config.z_max), "LikelihoodFieldConfig: z_max must be finite and positive");
+  check_fields(config, "LikelihoodFieldConfig");
   check(config.z_rand / config.z_max >= 1e-300, "LikelihoodFieldConfig: z_rand / z_max underflows");
 }
 

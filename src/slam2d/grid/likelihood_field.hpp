@@ -25,6 +25,7 @@
 #include <limits>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
@@ -34,14 +35,25 @@
 namespace slam2d {
 
 struct LikelihoodFieldConfig {
-  double max_distance = 2.0;    // m, > 0: distances are capped here; points outside the field get it
-  int occupied_threshold = 65;  // %, in [1, 100]: cells with occupancy >= this are obstacles (map_saver's 65)
+  double max_distance = 2.0;
+  int occupied_threshold = 65;  // map_saver's 65
   // The sensor model of Table 6.3:
-  double sigma_hit = 0.2;       // m, > 0: standard deviation of an end point's distance to the obstacle
-  double z_hit = 0.95;          // 1, >= 0: weight of the Gaussian hit density
-  double z_rand = 0.05;         // 1, > 0: weight of the uniform density of random readings
-  double z_max = 30.0;          // m, > 0: the sensor's maximum range; the uniform density is 1 / z_max
+  double sigma_hit = 0.2;
+  double z_hit = 0.95;
+  double z_rand = 0.05;
+  double z_max = 30.0;  // z_rand / z_max must not underflow
 };
+
+template <typename Fields>
+void describe(Fields& f, LikelihoodFieldConfig& c) {
+  f.number("max_distance", c.max_distance, "m", greater_than(0),
+           "distances are capped here; points outside the field get it");
+  f.number("occupied_threshold", c.occupied_threshold, "%", between(1, 100), "cells with occupancy >= this are obstacles");
+  f.number("sigma_hit", c.sigma_hit, "m", greater_than(0), "standard deviation of an end point's distance to the obstacle");
+  f.number("z_hit", c.z_hit, "1", at_least(0), "weight of the Gaussian hit density");
+  f.number("z_rand", c.z_rand, "1", greater_than(0), "weight of the uniform density of random readings");
+  f.number("z_max", c.z_max, "m", greater_than(0), "the sensor's maximum range; the uniform density is 1 / z_max");
+}
 
 /// `config` with another sigma_hit, its distance cap widened to at least 3 sigma_hit (a wider,
 /// smoother field: the Markov grid's cells, the global pose search's coarse poses).

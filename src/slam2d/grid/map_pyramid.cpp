@@ -8,8 +8,7 @@
 namespace slam2d {
 
 MapPyramid::MapPyramid(const MapPyramidConfig& config) : config_(config) {
-  check(config.levels >= 1 && config.levels <= 16,
-        "MapPyramidConfig: levels must be in [1, 16], got " + std::to_string(config.levels));
+  check_fields(config, "MapPyramidConfig");
   grids_.reserve(static_cast<std::size_t>(config.levels));
   for (int k = 0; k < config.levels; ++k) {
     OccupancyGridConfig grid = config.grid;

@@ -14,9 +14,15 @@
 namespace slam2d {
 
 struct MapPyramidConfig {
-  int levels = 3;            // 1, number of maps, in [1, 16]
-  OccupancyGridConfig grid;  // of level 0; level k uses resolution grid.resolution * 2^k
+  int levels = 3;
+  OccupancyGridConfig grid;
 };
+
+template <typename Fields>
+void describe(Fields& f, MapPyramidConfig& c) {
+  f.number("levels", c.levels, "1", between(1, 16), "number of maps");
+  f.section("grid", c.grid, "of level 0; level k uses resolution grid.resolution * 2^k");
+}
 
 class MapPyramid {
  public:

@@ -118,8 +118,7 @@ void pool_level(int width, int height, std::span<const float> scores, int window
 
 void validate(int width, int height, std::span<const float> scores, const MaxPoolPyramidConfig& config) {
   check(width >= 0 && height >= 0, "MaxPoolPyramid: negative grid size");
-  check(config.levels >= 1 && config.levels <= 16,
-        "MaxPoolPyramid: levels must lie in [1, 16], got " + std::to_string(config.levels));
+  check_fields(config, "MaxPoolPyramidConfig");
   check(!std::isnan(config.outside_score), "MaxPoolPyramid: outside_score is NaN");
   const long long window = 1LL << (config.levels - 1);
   check((width + window - 1) * (height + window - 1) <= kMaxLevelCells,

@@ -18,12 +18,21 @@
 #include <span>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
+
 namespace slam2d {
 
 struct MaxPoolPyramidConfig {
-  int levels = 7;              // 1, in [1, 16]: levels 0 .. levels - 1, level k pools 2^k x 2^k cells
-  float outside_score = 0.0f;  // score of every cell beyond the input grid (the lowest score, usually)
+  int levels = 7;
+  // Score of every cell beyond the input grid (the lowest score, usually; any but NaN). Not in
+  // the table: a float, set by the matcher that builds the pyramid, not by a user.
+  float outside_score = 0.0f;
 };
+
+template <typename Fields>
+void describe(Fields& f, MaxPoolPyramidConfig& c) {
+  f.number("levels", c.levels, "1", between(1, 16), "levels 0 .. levels - 1, level k pools 2^k x 2^k cells");
+}
 
 /// 1D sliding-window maximum (van Herk / Gil-Werman): out[j] = max(values[j .. j + window)) for
 /// j in [0, values.size() - window]. Throws Error for window < 1, window > values.size() or an

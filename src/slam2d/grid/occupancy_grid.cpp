@@ -15,24 +15,7 @@ namespace {
 
 using CellGrid = TiledGrid<OccupancyCell>;
 
-void check_open_interval(double value, double low, double high, const char* name) {
-  check(value > low && value < high, std::string("OccupancyGridConfig: ") + name + " must lie in (" +
-                                         std::to_string(low) + ", " + std::to_string(high) + "), got " +
-                                         std::to_string(value));
-}
-
-void validate(const OccupancyGridConfig& config) {
-  check(std::isfinite(config.resolution) && config.resolution > 0.0,
-        "OccupancyGridConfig: resolution must be positive, got " + std::to_string(config.resolution));
-  check_open_interval(config.probability_hit, 0.5, 1.0, "probability_hit");
-  check_open_interval(config.probability_miss, 0.0, 0.5, "probability_miss");
-  check_open_interval(config.probability_min, 0.0, 0.5, "probability_min");
-  check_open_interval(config.probability_max, 0.5, 1.0, "probability_max");
-  check(std::isfinite(config.max_clear_range) && config.max_clear_range >= 0.0,
-        "OccupancyGridConfig: max_clear_range must be finite and >= 0");
-  check(std::isfinite(config.max_range) && config.max_range > 0.0,
-        "OccupancyGridConfig: max_range must be finite and positive");
-}
+void validate(const OccupancyGridConfig& config) { check_fields(config, "OccupancyGridConfig"); }
 
 /// Writes into one tile after another, remembering the last tile: neighbouring cells of a ray
 /// mostly share it, which saves the table lookup and the copy-on-write check.

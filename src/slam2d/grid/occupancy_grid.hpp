@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/se2.hpp"
@@ -24,17 +25,28 @@
 namespace slam2d {
 
 struct OccupancyGridConfig {
-  double resolution = 0.05;        // m per cell, > 0
-  double probability_hit = 0.7;    // inverse sensor model: P(occupied | hit), in (0.5, 1)
-  double probability_miss = 0.4;   // P(occupied | ray passed through), in (0, 0.5)
-  double probability_min = 0.12;   // clamp, in (0, 0.5); keeps cells able to change
-  double probability_max = 0.97;   // clamp, in (0.5, 1)
-  // m, >= 0; no-return beams clear free space up to here and never mark. A no-return reading may
-  // be a dropout on a near wall, so it clears only a short way (Cartographer's
-  // missing_data_ray_length is 5 m too).
+  double resolution = 0.05;
+  double probability_hit = 0.7;
+  double probability_miss = 0.4;
+  double probability_min = 0.12;
+  double probability_max = 0.97;
+  // A no-return reading may be a dropout on a near wall, so it clears only a short way
+  // (Cartographer's missing_data_ray_length is 5 m too).
   double max_clear_range = 5.0;
-  double max_range = 100.0;        // m, > 0; returns at or beyond are treated as no-return beams
+  double max_range = 100.0;
 };
+
+template <typename Fields>
+void describe(Fields& f, OccupancyGridConfig& c) {
+  f.number("resolution", c.resolution, "m per cell", greater_than(0), "cell size");
+  f.number("probability_hit", c.probability_hit, "1", open_interval(0.5, 1), "inverse sensor model: P(occupied | hit)");
+  f.number("probability_miss", c.probability_miss, "1", open_interval(0, 0.5), "P(occupied | ray passed through)");
+  f.number("probability_min", c.probability_min, "1", open_interval(0, 0.5), "clamp; keeps cells able to change");
+  f.number("probability_max", c.probability_max, "1", open_interval(0.5, 1), "clamp; keeps cells able to change");
+  f.number("max_clear_range", c.max_clear_range, "m", at_least(0),
+           "no-return beams clear free space up to here and never mark");
+  f.number("max_range", c.max_range, "m", greater_than(0), "returns at or beyond are treated as no-return beams");
+}
 
 struct OccupancyCell {
   float log_odds = 0.0f;        // log(p / (1 - p)), clamped

@@ -50,7 +50,7 @@ double RobustKernel::cost(double residual) const {
 }
 
 void validate(const RobustKernel& kernel) {
-  check(std::isfinite(kernel.scale) && kernel.scale > 0.0, "RobustKernel: scale must be finite and positive");
+  check_fields(kernel, "RobustKernel");
 }
 
 }  // namespace slam2d

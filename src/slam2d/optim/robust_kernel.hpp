@@ -8,6 +8,10 @@
 // w(r) = rho'(r) / r minimises sum rho(r_i): each residual enters the normal equations as
 // H += w J^T J, b += w J^T r (normal_equations.hpp). `scale` (k) is in the residual's unit.
 
+#include <array>
+
+#include "slam2d/core/config_fields.hpp"
+
 namespace slam2d {
 
 enum class RobustKernelType {
@@ -16,10 +20,14 @@ enum class RobustKernelType {
   kCauchy,  // rho = k^2 / 2 log(1 + (r / k)^2)
   kTukey,   // biweight: w = (1 - (r / k)^2)^2 for |r| <= k, 0 beyond
 };
+constexpr auto choices(RobustKernelType) {
+  return std::array{Choice{"none", RobustKernelType::kNone}, Choice{"huber", RobustKernelType::kHuber},
+                    Choice{"cauchy", RobustKernelType::kCauchy}, Choice{"tukey", RobustKernelType::kTukey}};
+}
 
 struct RobustKernel {
   RobustKernelType type = RobustKernelType::kNone;
-  double scale = 1.0;  // k, in the residual's unit, > 0
+  double scale = 1.0;  // k
 
   /// The IRLS weight rho'(r) / r, in [0, 1] (1 for kNone, inline: the common case in hot loops).
   double weight(double residual) const { return type == RobustKernelType::kNone ? 1.0 : kernel_weight(residual); }
@@ -30,11 +38,17 @@ struct RobustKernel {
   double kernel_weight(double residual) const;  // weight() of the other kernels
 };
 
+template <typename Fields>
+void describe(Fields& f, RobustKernel& c) {
+  f.choice("type", c.type, "rho(r): none (r^2 / 2), huber, cauchy or tukey (biweight)");
+  f.number("scale", c.scale, "residual's unit", greater_than(0), "k: where the kernel departs from r^2 / 2");
+}
+
 double huber_weight(double residual, double scale);
 double cauchy_weight(double residual, double scale);
 double tukey_weight(double residual, double scale);
 
-/// Throws Error for a non-finite or non-positive scale.
+/// Throws Error for a field out of its range (a non-finite or non-positive scale).
 void validate(const RobustKernel& kernel);
 
 }  // namespace slam2d

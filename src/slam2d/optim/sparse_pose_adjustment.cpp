@@ -350,18 +350,7 @@ struct SparsePoseAdjustment::Solver {
   std::vector<std::array<int, 2>> endpoints;
 };
 
-void validate(const SparsePoseAdjustmentConfig& config) {
-  check(config.max_iterations >= 1, "SparsePoseAdjustmentConfig: max_iterations must be >= 1");
-  check(std::isfinite(config.initial_lambda) && config.initial_lambda > 0.0,
-        "SparsePoseAdjustmentConfig: initial_lambda must be finite and positive");
-  check(std::isfinite(config.lambda_up) && config.lambda_up > 1.0, "SparsePoseAdjustmentConfig: lambda_up must be > 1");
-  check(config.lambda_down > 0.0 && config.lambda_down < 1.0, "SparsePoseAdjustmentConfig: lambda_down must be in (0, 1)");
-  check(std::isfinite(config.relative_tolerance) && config.relative_tolerance >= 0.0,
-        "SparsePoseAdjustmentConfig: relative_tolerance must be finite and >= 0");
-  check(std::isfinite(config.step_tolerance) && config.step_tolerance >= 0.0,
-        "SparsePoseAdjustmentConfig: step_tolerance must be finite and >= 0");
-  validate(config.loop_kernel);
-}
+void validate(const SparsePoseAdjustmentConfig& config) { check_fields(config, "SparsePoseAdjustmentConfig"); }
 
 SparsePoseAdjustment::SparsePoseAdjustment(const SparsePoseAdjustmentConfig& config)
     : config_(config), solver_(std::make_unique<Solver>()) {

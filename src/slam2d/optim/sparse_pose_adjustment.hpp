@@ -22,14 +22,27 @@
 namespace slam2d {
 
 struct SparsePoseAdjustmentConfig {
-  int max_iterations = 100;          // 1, >= 1: LM iterations (accepted plus rejected steps)
-  double initial_lambda = 1e-4;      // 1, > 0: damping of the first step, relative to diag(H)
-  double lambda_up = 10.0;           // 1, > 1: factor on a rejected step
-  double lambda_down = 0.1;          // 1, in (0, 1): factor on an accepted step
-  double relative_tolerance = 1e-9;  // 1, >= 0: converged when an accepted step lowers the cost by less than this fraction
-  double step_tolerance = 1e-10;     // m and rad, >= 0: converged when a step moves no coordinate by more than this
-  RobustKernel loop_kernel{};        // for edges with robust = true (kNone: plain least squares)
+  int max_iterations = 100;
+  double initial_lambda = 1e-4;
+  double lambda_up = 10.0;
+  double lambda_down = 0.1;
+  double relative_tolerance = 1e-9;
+  double step_tolerance = 1e-10;
+  RobustKernel loop_kernel{};
 };
+
+template <typename Fields>
+void describe(Fields& f, SparsePoseAdjustmentConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "LM iterations (accepted plus rejected steps)");
+  f.number("initial_lambda", c.initial_lambda, "1", greater_than(0), "damping of the first step, relative to diag(H)");
+  f.number("lambda_up", c.lambda_up, "1", greater_than(1), "factor on a rejected step");
+  f.number("lambda_down", c.lambda_down, "1", open_interval(0, 1), "factor on an accepted step");
+  f.number("relative_tolerance", c.relative_tolerance, "1", at_least(0),
+           "converged when an accepted step lowers the cost by less than this fraction");
+  f.number("step_tolerance", c.step_tolerance, "m and rad", at_least(0),
+           "converged when a step moves no coordinate by more than this");
+  f.section("loop_kernel", c.loop_kernel, "for edges with robust = true (none: plain least squares)");
+}
 
 struct SparsePoseAdjustmentResult {
   double initial_chi2 = 0.0;  // sum e^T Omega e before (no kernel)

@@ -8,19 +8,8 @@
 namespace slam2d {
 
 void validate(const LaserModelConfig& config) {
-  const double fields[] = {config.field_of_view, config.range_max, config.range_noise_sigma,
-                           config.dropout_probability, config.rate_hz, config.sweep_duration};
-  for (const double f : fields) check(std::isfinite(f), "laser model: every parameter must be finite");
-  check(config.T_robot_sensor.vector().allFinite(), "laser model: T_robot_sensor must be finite");
-  check(config.beams >= 2, "laser model: beams must be >= 2");
-  check(config.field_of_view > 0.0 && config.field_of_view <= 2.0 * std::numbers::pi,
-        "laser model: field_of_view must be in (0, 2 pi]");
-  check(config.range_max > 0.0, "laser model: range_max must be > 0");
-  check(config.range_noise_sigma >= 0.0, "laser model: range_noise_sigma must be >= 0");
-  check(config.dropout_probability >= 0.0 && config.dropout_probability <= 1.0,
-        "laser model: dropout_probability must be in [0, 1]");
-  check(config.rate_hz > 0.0, "laser model: rate_hz must be > 0");
-  check(config.sweep_duration >= 0.0, "laser model: sweep_duration must be >= 0");
+  check_fields(config, "LaserModelConfig");
+  check(config.T_robot_sensor.vector().allFinite(), "LaserModelConfig: T_robot_sensor must be finite");
 }
 
 double beam_increment(const LaserModelConfig& config) {

@@ -12,6 +12,7 @@
 #include <functional>
 #include <numbers>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
@@ -20,15 +21,26 @@
 namespace slam2d {
 
 struct LaserModelConfig {
-  int beams = 180;                             // >= 2
-  double field_of_view = std::numbers::pi;     // rad, in (0, 2 pi]
-  double range_max = 30.0;                     // m; no return (nothing hit, or a dropout) reads range_max
-  double range_noise_sigma = 0.01;             // m, standard deviation of the Gaussian range noise
-  double dropout_probability = 0.005;          // 1, chance that a beam returns nothing
-  double rate_hz = 10.0;                       // Hz, scans per second
-  SE2 T_robot_sensor;                          // the sensor's mounting pose on the robot
-  double sweep_duration = 0.0;                 // s, first to last beam, >= 0; 0 = all beams at the stamp
+  int beams = 180;
+  double field_of_view = std::numbers::pi;
+  double range_max = 30.0;
+  double range_noise_sigma = 0.01;
+  double dropout_probability = 0.005;
+  double rate_hz = 10.0;
+  SE2 T_robot_sensor;  // the sensor's mounting pose on the robot (finite; not in the table)
+  double sweep_duration = 0.0;
 };
+
+template <typename Fields>
+void describe(Fields& f, LaserModelConfig& c) {
+  f.number("beams", c.beams, "1", at_least(2), "beams per scan");
+  f.number("field_of_view", c.field_of_view, "rad", open_closed(0, 2 * std::numbers::pi), "first to last beam");
+  f.number("range_max", c.range_max, "m", greater_than(0), "no return (nothing hit, or a dropout) reads range_max");
+  f.number("range_noise_sigma", c.range_noise_sigma, "m", at_least(0), "standard deviation of the Gaussian range noise");
+  f.number("dropout_probability", c.dropout_probability, "1", between(0, 1), "chance that a beam returns nothing");
+  f.number("rate_hz", c.rate_hz, "Hz", greater_than(0), "scans per second");
+  f.number("sweep_duration", c.sweep_duration, "s", at_least(0), "first to last beam; 0 = all beams at the stamp");
+}
 
 /// Throws Error for beams < 2, a field of view outside (0, 2 pi], range_max <= 0, negative noise,
 /// a dropout probability outside [0, 1], rate_hz <= 0, a negative sweep_duration, or non-finite values.

@@ -18,15 +18,7 @@ double sample_with_variance(Rng* rng, double variance) {
 
 }  // namespace
 
-void validate(const OdometryModelConfig& config) {
-  const double fields[] = {config.alpha1, config.alpha2, config.alpha3, config.alpha4,
-                           config.scale_error, config.heading_bias, config.rate_hz};
-  for (const double f : fields) check(std::isfinite(f), "odometry model: every parameter must be finite");
-  check(config.alpha1 >= 0.0 && config.alpha2 >= 0.0 && config.alpha3 >= 0.0 && config.alpha4 >= 0.0,
-        "odometry model: alpha1..alpha4 must be >= 0");
-  check(config.scale_error > -1.0, "odometry model: scale_error must be > -1");
-  check(config.rate_hz > 0.0, "odometry model: rate_hz must be > 0");
-}
+void validate(const OdometryModelConfig& config) { check_fields(config, "OdometryModelConfig"); }
 
 SE2 corrupt_motion(const SE2& T_prev_curr, const OdometryModelConfig& config, Rng* rng) {
   // Decompose into rotate-translate-rotate (Table 5.6, lines 2-4).

@@ -8,20 +8,34 @@
 
 #include <Eigen/Core>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d {
 
 struct RouteFollowerConfig {
-  double speed = 0.6;                     // m/s, cruise speed
-  double max_turn_rate = 1.0;             // rad/s
-  double max_acceleration = 0.5;          // m/s^2
-  double max_angular_acceleration = 4.0;  // rad/s^2
-  double min_lookahead = 0.3;             // m, pure-pursuit look-ahead at standstill
-  double lookahead_time = 0.5;            // s, look-ahead grows by speed * this
-  double corner_cut = 0.1;                // m, how far a corner's arc may pass inside the corner
-  double min_speed = 0.05;                // m/s, the slowest corner speed
+  double speed = 0.6;
+  double max_turn_rate = 1.0;
+  double max_acceleration = 0.5;
+  double max_angular_acceleration = 4.0;
+  double min_lookahead = 0.3;
+  double lookahead_time = 0.5;
+  double corner_cut = 0.1;
+  double min_speed = 0.05;
 };
+
+template <typename Fields>
+void describe(Fields& f, RouteFollowerConfig& c) {
+  f.number("speed", c.speed, "m/s", greater_than(0), "cruise speed");
+  f.number("max_turn_rate", c.max_turn_rate, "rad/s", greater_than(0), "fastest turn");
+  f.number("max_acceleration", c.max_acceleration, "m/s^2", greater_than(0), "largest change of speed");
+  f.number("max_angular_acceleration", c.max_angular_acceleration, "rad/s^2", greater_than(0),
+           "largest change of turn rate");
+  f.number("min_lookahead", c.min_lookahead, "m", at_least(0), "pure-pursuit look-ahead at standstill");
+  f.number("lookahead_time", c.lookahead_time, "s", at_least(0), "look-ahead grows by speed * this");
+  f.number("corner_cut", c.corner_cut, "m", at_least(0), "how far a corner's arc may pass inside the corner");
+  f.number("min_speed", c.min_speed, "m/s", greater_than(0), "the slowest corner speed");
+}
 
 /// A velocity command: forward speed (m/s) and turn rate (rad/s, counter-clockwise).
 struct VelocityCommand {

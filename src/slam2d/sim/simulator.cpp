@@ -14,7 +14,6 @@ namespace slam2d {
 
 namespace {
 
-constexpr double kMaxDuration = 1e5;     // s
 constexpr double kMaxMessages = 5e7;     // a bound on the run's size, against absurd rates
 constexpr std::uint64_t kOdometryStream = 1;
 constexpr std::uint64_t kLaserStream = 2;
@@ -130,16 +129,8 @@ void Simulation::laser_tick(double stamp, const SE2& T_world_robot) {
 
 // Everything but the world name.
 void validate_settings(const SimulationConfig& config) {
-  check(std::isfinite(config.duration) && config.duration >= 0.0 && config.duration <= kMaxDuration,
-        "simulation: duration must be in [0, 1e5] s");
-  check(std::isfinite(config.speed) && config.speed > 0.0, "simulation: speed must be > 0");
-  check(std::isfinite(config.max_turn_rate) && config.max_turn_rate > 0.0, "simulation: max_turn_rate must be > 0");
-  check(std::isfinite(config.max_acceleration) && config.max_acceleration > 0.0,
-        "simulation: max_acceleration must be > 0");
-  check(std::isfinite(config.control_rate_hz) && config.control_rate_hz > 0.0,
-        "simulation: control_rate_hz must be > 0");
-  validate(config.laser);
-  validate(config.odometry);
+  check_fields(config, "SimulationConfig");
+  validate(config.laser);  // T_robot_sensor
   const double events = config.duration * (config.control_rate_hz + config.odometry.rate_hz + config.laser.rate_hz);
   check(events <= kMaxMessages, "simulation: duration x rates is too large (more than 5e7 events)");
 }

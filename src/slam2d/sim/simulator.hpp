@@ -30,16 +30,28 @@
 namespace slam2d {
 
 struct SimulationConfig {
-  std::string world = "office";    // a make_world name (ignored by the overload taking a World)
-  double duration = 240.0;         // s, in [0, 1e5]
-  std::uint64_t seed = 1;          // of every random stream
-  double speed = 0.6;              // m/s, cruise speed
-  double max_turn_rate = 1.0;      // rad/s
-  double max_acceleration = 0.5;   // m/s^2
-  double control_rate_hz = 100.0;  // Hz, velocity command updates
+  std::string world = "office";  // a make_world name (ignored by the overload taking a World); not in the table
+  double duration = 240.0;
+  std::uint64_t seed = 1;
+  double speed = 0.6;
+  double max_turn_rate = 1.0;
+  double max_acceleration = 0.5;
+  double control_rate_hz = 100.0;
   LaserModelConfig laser;
   OdometryModelConfig odometry;
 };
+
+template <typename Fields>
+void describe(Fields& f, SimulationConfig& c) {
+  f.number("duration", c.duration, "s", between(0, 1e5), "simulated time");
+  f.number("seed", c.seed, "1", any_value(), "of every random stream");
+  f.number("speed", c.speed, "m/s", greater_than(0), "cruise speed");
+  f.number("max_turn_rate", c.max_turn_rate, "rad/s", greater_than(0), "fastest turn");
+  f.number("max_acceleration", c.max_acceleration, "m/s^2", greater_than(0), "largest change of speed");
+  f.number("control_rate_hz", c.control_rate_hz, "Hz", greater_than(0), "velocity command updates");
+  f.section("laser", c.laser, "the simulated laser range finder");
+  f.section("odometry", c.odometry, "the simulated wheel odometry");
+}
 
 struct SimulatedRun {
   SimulationConfig config;              // what made this run
