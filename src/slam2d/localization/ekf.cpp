@@ -13,18 +13,9 @@
 namespace slam2d {
 
 void validate(const EkfConfig& config) {
-  validate(config.motion);
-  check(config.max_beams > 0 && config.usable_range > 0.0, "ekf: max_beams and usable_range must be > 0");
-  check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0, "ekf: min_inlier_fraction must be in [0, 1]");
-  check(config.gate_chi2 > 0.0, "ekf: gate_chi2 must be > 0");
-  check(config.lost_after_rejections >= 1, "ekf: lost_after_rejections must be >= 1");
-  check(config.matcher.max_iterations >= 1 && config.matcher.outlier_distance > 0.0 && config.matcher.inlier_distance > 0.0 &&
-            config.matcher.sigma > 0.0,
-        "ekf: matcher settings must be positive");
-  check(config.min_window_xy > 0.0 && config.max_window_xy >= config.min_window_xy && config.min_window_theta > 0.0 &&
-            config.max_window_theta >= config.min_window_theta && config.max_window_theta <= std::numbers::pi,
-        "ekf: need 0 < min_window <= max_window (theta at most pi)");
-  check(config.angular_step > 0.0 && config.table_sigma > 0.0, "ekf: angular_step and table_sigma must be > 0");
+  check_fields(config, "EkfConfig");
+  check(config.max_window_xy >= config.min_window_xy, "EkfConfig: max_window_xy must be >= min_window_xy");
+  check(config.max_window_theta >= config.min_window_theta, "EkfConfig: max_window_theta must be >= min_window_theta");
 }
 
 namespace {

@@ -29,6 +29,7 @@
 // EKF cannot relocalize globally (use mcl, markov or hybrid for that).
 
 #include <cstddef>
+#include <numbers>
 #include <string>
 
 #include "slam2d/core/covariance.hpp"
@@ -44,29 +45,52 @@ struct EkfConfig {
   // Rotation noise from rotation well above the particle filter's: a Gaussian cannot absorb the
   // wheel slip of a fast turn in the tails as a particle set does, and a rejected match costs more.
   OdometryMotionConfig motion{.alpha1 = 0.2};
-  LikelihoodFieldMatchConfig matcher{};  // the refinement
+  LikelihoodFieldMatchConfig matcher{};
   // The correlative stage: window half-widths +-3 sigma of the prediction, clamped to these.
-  double min_window_xy = 0.1;         // m, > 0
-  double max_window_xy = 0.5;         // m, >= min_window_xy
-  double min_window_theta = 0.05;     // rad, > 0
-  double max_window_theta = 0.35;     // rad, >= min_window_theta
-  double angular_step = 0.0087;       // rad, > 0: half a degree
-  double table_sigma = 0.05;          // m, > 0: the lookup table's kernel (one map cell of 5 cm)
-  int max_beams = 90;                // 1, > 0: end points matched per scan
-  double usable_range = 30.0;        // m, > 0
-  double min_inlier_fraction = 0.5;  // 1, in [0, 1]
-  double gate_chi2 = 16.27;          // 1, > 0: chi-square(3) at 0.999
-  int lost_after_rejections = 10;    // scans, >= 1
+  double min_window_xy = 0.1;
+  double max_window_xy = 0.5;  // >= min_window_xy
+  double min_window_theta = 0.05;
+  double max_window_theta = 0.35;  // >= min_window_theta
+  double angular_step = 0.0087;  // half a degree
+  double table_sigma = 0.05;     // one map cell of 5 cm
+  int max_beams = 90;
+  double usable_range = 30.0;
+  double min_inlier_fraction = 0.5;
+  double gate_chi2 = 16.27;  // chi-square(3) at 0.999
+  int lost_after_rejections = 10;
   // Each rejected scan widens the covariance by this much (the odometry may have slipped: the
   // gate must open to the first consistent match rather than reject it forever).
-  double rejection_sigma_xy = 0.05;     // m, >= 0
-  double rejection_sigma_theta = 0.02;  // rad, >= 0
+  double rejection_sigma_xy = 0.05;
+  double rejection_sigma_theta = 0.02;
   // Added to the matcher's covariance: consecutive scans of a standing robot are not independent
   // measurements, and the Hessian covariance of ~90 correlated end points is optimistic.
-  double measurement_sigma_xy = 0.1;      // m, >= 0
-  double measurement_sigma_theta = 0.05;  // rad, >= 0
+  double measurement_sigma_xy = 0.1;
+  double measurement_sigma_theta = 0.05;
   LocalizationStatusConfig status{};
 };
+
+template <typename Fields>
+void describe(Fields& f, EkfConfig& c) {
+  f.section("motion", c.motion, "the prediction's odometry noise");
+  f.section("matcher", c.matcher, "the refinement");
+  f.number("min_window_xy", c.min_window_xy, "m", greater_than(0), "smallest translation half-width of the correlative stage");
+  f.number("max_window_xy", c.max_window_xy, "m", greater_than(0), "largest one (>= min_window_xy)");
+  f.number("min_window_theta", c.min_window_theta, "rad", greater_than(0), "smallest rotation half-width");
+  f.number("max_window_theta", c.max_window_theta, "rad", open_closed(0, std::numbers::pi),
+           "largest one (>= min_window_theta)");
+  f.number("angular_step", c.angular_step, "rad", greater_than(0), "rotation step of the correlative stage");
+  f.number("table_sigma", c.table_sigma, "m", greater_than(0), "the lookup table's kernel");
+  f.number("max_beams", c.max_beams, "1", at_least(1), "end points matched per scan");
+  f.number("usable_range", c.usable_range, "m", greater_than(0), "longer readings are not matched");
+  f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "fewer inliers and the match is rejected");
+  f.number("gate_chi2", c.gate_chi2, "1", greater_than(0), "Mahalanobis gate on the innovation");
+  f.number("lost_after_rejections", c.lost_after_rejections, "scans", at_least(1), "rejections in a row before lost");
+  f.number("rejection_sigma_xy", c.rejection_sigma_xy, "m", any_value(), "covariance widening per rejected scan");
+  f.number("rejection_sigma_theta", c.rejection_sigma_theta, "rad", any_value(), "... in heading");
+  f.number("measurement_sigma_xy", c.measurement_sigma_xy, "m", any_value(), "added to the matcher's covariance");
+  f.number("measurement_sigma_theta", c.measurement_sigma_theta, "rad", any_value(), "... in heading");
+  f.section("status", c.status, "when the estimate counts as localized or lost");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const EkfConfig& config);

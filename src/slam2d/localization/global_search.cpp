@@ -26,14 +26,7 @@ std::vector<Eigen::Vector2d> free_positions(const OccupancyMap& map, int stride)
 
 }  // namespace
 
-void validate(const GlobalSearchConfig& config) {
-  check(config.step_xy > 0.0 && config.step_theta > 0.0 && config.step_theta <= std::numbers::pi,
-        "global search: step_xy must be > 0 and step_theta in (0, pi]");
-  check(config.max_poses <= 0xFFFFFFFFu, "global search: max_poses must fit 32 bits");
-  check(config.max_poses >= 1 && config.keep >= 1 && config.max_beams >= 1 && config.updates >= 1,
-        "global search: max_poses, keep, max_beams and updates must be >= 1");
-  check(config.sigma_hit > 0.0, "global search: sigma_hit must be > 0");
-}
+void validate(const GlobalSearchConfig& config) { check_fields(config, "GlobalSearchConfig"); }
 
 GlobalPoseSearch::GlobalPoseSearch(const LocalizationMap& map, const GlobalSearchConfig& config)
     : config_((validate(config), config)),

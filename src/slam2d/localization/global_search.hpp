@@ -23,8 +23,10 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
@@ -33,14 +35,27 @@
 namespace slam2d {
 
 struct GlobalSearchConfig {
-  double step_xy = 0.25;              // m, > 0: the finest position step of the pose grid
-  double step_theta = 0.0873;         // rad, > 0: the heading step (5 deg, 72 headings)
-  std::size_t max_poses = 4'000'000;  // >= 1: budget of grid poses scored by the first scan; step_xy grows to stay within
-  double sigma_hit = 0.4;             // m, > 0: the search's likelihood-field sigma (raised to the grid's step if below)
-  int max_beams = 60;                 // >= 1: beams scored per scan
-  std::size_t keep = 100'000;         // >= 1: hypotheses kept after the first scan
-  int updates = 5;                    // >= 1: sensor updates scored before the filter is seeded
+  double step_xy = 0.25;
+  double step_theta = 0.0873;  // 5 deg, 72 headings
+  std::size_t max_poses = 4'000'000;
+  double sigma_hit = 0.4;
+  int max_beams = 60;
+  std::size_t keep = 100'000;
+  int updates = 5;
 };
+
+template <typename Fields>
+void describe(Fields& f, GlobalSearchConfig& c) {
+  f.number("step_xy", c.step_xy, "m", greater_than(0), "the finest position step of the pose grid");
+  f.number("step_theta", c.step_theta, "rad", open_closed(0, std::numbers::pi), "the heading step");
+  f.number("max_poses", c.max_poses, "1", between(1, 4294967295.0),
+           "budget of grid poses scored by the first scan; step_xy grows to stay within (fits 32 bits)");
+  f.number("sigma_hit", c.sigma_hit, "m", greater_than(0),
+           "the search's likelihood-field sigma (raised to the grid's step if below)");
+  f.number("max_beams", c.max_beams, "1", at_least(1), "beams scored per scan");
+  f.number("keep", c.keep, "1", at_least(1), "hypotheses kept after the first scan");
+  f.number("updates", c.updates, "1", at_least(1), "sensor updates scored before the filter is seeded");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const GlobalSearchConfig& config);

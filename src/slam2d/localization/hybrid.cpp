@@ -6,7 +6,7 @@ namespace slam2d {
 
 HybridLocalization::HybridLocalization(const LocalizationMap& map, const HybridConfig& config)
     : config_(config), grid_(map, config.grid), ekf_(map, config.ekf) {
-  check(config_.max_disagreement > 0.0, "hybrid: max_disagreement must be > 0");
+  check_fields(config_, "HybridConfig");
 }
 
 void HybridLocalization::initialize(const SE2& T_map_robot, const Covariance3& covariance) {

@@ -22,8 +22,16 @@ struct HybridConfig {
   MarkovGridConfig grid{.resolution = 0.4, .angles = 36, .max_beams = 30, .sigma_hit = 0.5, .update_distance = 0.4,
                         .update_angle = 0.1745};
   EkfConfig ekf{};
-  double max_disagreement = 1.5;  // m, > 0
+  double max_disagreement = 1.5;
 };
+
+template <typename Fields>
+void describe(Fields& f, HybridConfig& c) {
+  f.section("grid", c.grid, "the Markov grid that keeps the global belief");
+  f.section("ekf", c.ekf, "the EKF that tracks");
+  f.number("max_disagreement", c.max_disagreement, "m", greater_than(0),
+           "the grid takes over when localized farther than this from the EKF");
+}
 
 class HybridLocalization : public Localizer {
  public:

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <string>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/se2.hpp"
@@ -25,16 +26,29 @@ struct LocalizationEstimate {
 };
 
 struct LocalizationStatusConfig {
-  double plausibility_distance = 0.15; // m, > 0: an end point this close to an obstacle is explained
+  double plausibility_distance = 0.15;
   // Becoming localized: all three hold.
-  double max_sigma_xy = 0.5;           // m: sqrt of the largest eigenvalue of the (x, y) block
-  double max_sigma_theta = 0.3;        // rad
-  double min_plausibility = 0.7;       // 1
+  double max_sigma_xy = 0.5;
+  double max_sigma_theta = 0.3;
+  double min_plausibility = 0.7;
   // Becoming lost: one of these for `lost_after` consecutive sensor updates.
-  double lost_sigma_xy = 1.0;          // m
-  double lost_plausibility = 0.5;      // 1
-  int lost_after = 3;                  // sensor updates, >= 1
+  double lost_sigma_xy = 1.0;
+  double lost_plausibility = 0.5;
+  int lost_after = 3;
 };
+
+template <typename Fields>
+void describe(Fields& f, LocalizationStatusConfig& c) {
+  f.number("plausibility_distance", c.plausibility_distance, "m", greater_than(0),
+           "an end point this close to an obstacle is explained");
+  f.number("max_sigma_xy", c.max_sigma_xy, "m", any_value(),
+           "localized below this sqrt of the largest eigenvalue of the (x, y) block ...");
+  f.number("max_sigma_theta", c.max_sigma_theta, "rad", any_value(), "... and this heading sigma ...");
+  f.number("min_plausibility", c.min_plausibility, "1", any_value(), "... and from this plausibility");
+  f.number("lost_sigma_xy", c.lost_sigma_xy, "m", any_value(), "lost above this (x, y) sigma ...");
+  f.number("lost_plausibility", c.lost_plausibility, "1", any_value(), "... or below this plausibility ...");
+  f.number("lost_after", c.lost_after, "sensor updates", at_least(1), "... for this many updates in a row");
+}
 
 /// The localized / lost state machine.
 class LocalizationStatus {

@@ -11,17 +11,7 @@
 
 namespace slam2d {
 
-void validate(const MarkovGridConfig& config) {
-  check(config.resolution > 0.0 && config.angles >= 4 && config.max_beams > 0 && config.usable_range > 0.0 &&
-            config.sigma_hit > 0.0,
-        "markov: resolution, max_beams, usable_range and sigma_hit must be > 0, angles >= 4");
-  check(config.update_distance >= 0.0 && config.update_angle >= 0.0, "markov: update thresholds must be >= 0");
-  check(config.prune_threshold >= 0.0 && config.prune_threshold < 1.0 && config.selective_threshold >= 0.0 &&
-            config.selective_threshold < 1.0,
-        "markov: thresholds must be in [0, 1)");
-  check(config.estimate_radius > 0.0, "markov: estimate_radius must be > 0");
-  validate(config.motion);
-}
+void validate(const MarkovGridConfig& config) { check_fields(config, "MarkovGridConfig"); }
 
 MarkovGridLocalization::MarkovGridLocalization(const LocalizationMap& map, const MarkovGridConfig& config)
     : map_(map),

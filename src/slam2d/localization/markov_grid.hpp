@@ -36,19 +36,36 @@
 namespace slam2d {
 
 struct MarkovGridConfig {
-  double resolution = 0.2;           // m, > 0: cell size of the belief
-  int angles = 72;                   // 1, >= 4: heading layers (5 deg)
-  int max_beams = 30;                // 1, > 0
-  double usable_range = 30.0;        // m, > 0
-  double sigma_hit = 0.4;            // m, > 0: likelihood-field sigma of the grid's sensor model
-  double update_distance = 0.2;      // m, >= 0
-  double update_angle = 0.0873;      // rad, >= 0 (5 deg)
-  double prune_threshold = 1e-9;     // 1, of the maximum: cells below are dropped
-  double selective_threshold = 1e-5; // 1, of the maximum: once localized, only cells above are updated
-  double estimate_radius = 1.0;      // m: mass around the mode that makes the estimate
-  OdometryMotionConfig motion{};     // the noise the motion convolution covers
+  double resolution = 0.2;
+  int angles = 72;  // 5 deg
+  int max_beams = 30;
+  double usable_range = 30.0;
+  double sigma_hit = 0.4;
+  double update_distance = 0.2;
+  double update_angle = 0.0873;  // 5 deg
+  double prune_threshold = 1e-9;
+  double selective_threshold = 1e-5;
+  double estimate_radius = 1.0;
+  OdometryMotionConfig motion{};
   LocalizationStatusConfig status{};
 };
+
+template <typename Fields>
+void describe(Fields& f, MarkovGridConfig& c) {
+  f.number("resolution", c.resolution, "m", greater_than(0), "cell size of the belief");
+  f.number("angles", c.angles, "1", at_least(4), "heading layers");
+  f.number("max_beams", c.max_beams, "1", at_least(1), "beams scored per update");
+  f.number("usable_range", c.usable_range, "m", greater_than(0), "longer readings are max-range readings");
+  f.number("sigma_hit", c.sigma_hit, "m", greater_than(0), "likelihood-field sigma of the grid's sensor model");
+  f.number("update_distance", c.update_distance, "m", at_least(0), "filter update once the robot moved this far ...");
+  f.number("update_angle", c.update_angle, "rad", at_least(0), "... or turned this much");
+  f.number("prune_threshold", c.prune_threshold, "1", closed_open(0, 1), "of the maximum: cells below are dropped");
+  f.number("selective_threshold", c.selective_threshold, "1", closed_open(0, 1),
+           "of the maximum: once localized, only cells above are updated");
+  f.number("estimate_radius", c.estimate_radius, "m", greater_than(0), "mass around the mode that makes the estimate");
+  f.section("motion", c.motion, "the noise the motion convolution covers");
+  f.section("status", c.status, "when the estimate counts as localized or lost");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const MarkovGridConfig& config);

@@ -13,28 +13,10 @@
 namespace slam2d {
 
 void validate(const MclConfig& config) {
-  validate(config.motion);
-  validate(config.beam);
-  check(config.max_beams > 0, "mcl: max_beams must be > 0");
-  check(config.likelihood_exponent > 0.0 && config.likelihood_exponent <= 1.0, "mcl: likelihood_exponent must be in (0, 1]");
-  check(config.usable_range > 0.0, "mcl: usable_range must be > 0");
-  check(config.min_particles >= 1 && config.max_particles >= config.min_particles,
-        "mcl: need 1 <= min_particles <= max_particles");
-  check(config.kld_epsilon > 0.0 && config.kld_bin_xy > 0.0 && config.kld_bin_theta > 0.0,
-        "mcl: kld_epsilon and the bin sizes must be > 0");
-  check(config.update_distance >= 0.0 && config.update_angle >= 0.0, "mcl: update thresholds must be >= 0");
-  check(config.alpha_slow > 0.0 && config.alpha_slow < config.alpha_fast && config.alpha_fast <= 1.0,
-        "mcl: need 0 < alpha_slow < alpha_fast <= 1");
-  check(config.max_injection >= 0.0 && config.max_injection <= 1.0, "mcl: max_injection must be in [0, 1]");
-  check(config.injection_ratio > 0.0 && config.injection_ratio <= 1.0, "mcl: injection_ratio must be in (0, 1]");
-  check(config.takeover_updates >= 1 && config.recovery_updates >= 1 && config.displaced_updates >= 1,
-        "mcl: takeover_updates, recovery_updates and displaced_updates must be >= 1");
-  check(config.status.lost_after >= 1, "mcl: status.lost_after must be >= 1");
-  check(config.place_settle_updates >= 0, "mcl: place_settle_updates must be >= 0");
-  check(std::isfinite(config.place_min_travel) && config.place_min_travel >= 0.0, "mcl: place_min_travel must be finite and >= 0");
-  check(config.max_places >= 1 && config.place_radius_xy > 0.0 && config.place_radius_theta > 0.0 && config.place_margin > 0.0,
-        "mcl: max_places must be >= 1, place_radius_xy, place_radius_theta and place_margin > 0");
-  validate(config.global);
+  check_fields(config, "MclConfig");
+  validate(config.beam);  // the weights' sum
+  check(config.max_particles >= config.min_particles, "MclConfig: max_particles must be >= min_particles");
+  check(config.alpha_slow < config.alpha_fast, "MclConfig: alpha_slow must be < alpha_fast");
 }
 
 namespace {

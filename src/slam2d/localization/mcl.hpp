@@ -64,6 +64,7 @@
 // the likelihood drops). The KLD bin count k is taken from a low-variance draw of the current
 // particle count before the final draw (an upper bound of the k a sequential draw would see).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -81,46 +82,97 @@
 namespace slam2d {
 
 enum class SensorModelKind { kLikelihoodField, kBeam };
+constexpr auto choices(SensorModelKind) {
+  return std::array{Choice{"likelihood_field", SensorModelKind::kLikelihoodField}, Choice{"beam", SensorModelKind::kBeam}};
+}
 
 struct MclConfig {
   OdometryMotionConfig motion{};
   SensorModelKind sensor = SensorModelKind::kLikelihoodField;
-  BeamModelConfig beam{};           // for SensorModelKind::kBeam
-  int max_beams = 60;               // 1, > 0: beams scored per scan
-  double likelihood_exponent = 1.0; // 1, in (0, 1]: p(z | x)^exponent: neighbouring beams are not independent,
-                                    // and a sharper posterior than the map supports jumps to look-alike places
-  double usable_range = 30.0;       // m, > 0: longer readings are treated as max-range readings
-  std::size_t min_particles = 500;  // >= 1
-  std::size_t max_particles = 5000; // >= min_particles; also the count a global start is seeded with
-  GlobalSearchConfig global{};      // the coarse pass of a global start (global_search.hpp)
+  BeamModelConfig beam{};
+  int max_beams = 60;
+  // p(z | x)^exponent: neighbouring beams are not independent, and a sharper posterior than the
+  // map supports jumps to look-alike places.
+  double likelihood_exponent = 1.0;
+  double usable_range = 30.0;
+  std::size_t min_particles = 500;
+  std::size_t max_particles = 5000;  // >= min_particles
+  GlobalSearchConfig global{};
   // The places a global start tracks side by side (clustered particle filter, see the header):
-  std::size_t max_places = 200;     // >= 1: candidate places seeded from the coarse pass
-  double place_radius_xy = 1.0;     // m, > 0: hypotheses this close (and within place_radius_theta) are one place
-  double place_radius_theta = 0.5;  // rad, > 0
-  double place_margin = 40.0;       // log-likelihood, > 0: a place this far below the best is dropped (one end point
-                                    // explained at 0 m instead of unexplained is log(1.9 / 0.0017) = 7: about 6 end points)
-  int place_settle_updates = 10;    // >= 0: updates after seeding before the places' evidence counts (they settle on their best pose)
-  double place_min_travel = 1.0;    // m, >= 0: no place is dropped before the robot drove this far since seeding
-                                    // (the place radius; picked on Intel with degraded scanners, docs/methods/localization.md)
-  bool kld_sampling = true;         // false: always max_particles
-  double kld_epsilon = 0.05;        // 1, > 0: bound on the KL divergence (Fox 2003)
-  double kld_z = 2.326;             // 1: upper 1 - delta quantile of N(0, 1) (delta = 0.01)
-  double kld_bin_xy = 0.5;          // m, > 0: histogram bin size
-  double kld_bin_theta = 0.1745;    // rad, > 0: 10 deg
-  double update_distance = 0.1;     // m, >= 0: filter update once the robot moved this far ...
-  double update_angle = 0.1;        // rad, >= 0: ... or turned this much
-  bool augmented = true;            // random-sample injection (Gutmann & Fox 2002)
-  double alpha_slow = 0.01;         // 1, in (0, 1): long-term average rate
-  double alpha_fast = 0.3;          // 1, in (alpha_slow, 1]: short-term average rate
-  double max_injection = 0.2;       // 1, in [0, 1]: cap on the injected fraction per step
-  double injection_ratio = 0.7;     // 1, in (0, 1]: inject only while w_fast < injection_ratio w_slow
-  double min_likelihood_ratio = 0.5; // 1: w_fast below this fraction of w_slow counts as implausible (status)
-  int takeover_updates = 30;        // >= 1: updates in a row the recovery set must win before it replaces the tracked set
-  int recovery_updates = 10;        // >= 1: sensor updates the recovery set searches on after the last injection
-  int displaced_updates = 100;      // >= 1: sensor updates a displaced tracked set is kept after a takeover
+  std::size_t max_places = 200;
+  double place_radius_xy = 1.0;
+  double place_radius_theta = 0.5;
+  // One end point explained at 0 m instead of unexplained is log(1.9 / 0.0017) = 7: 40 is about 6
+  // end points.
+  double place_margin = 40.0;
+  int place_settle_updates = 10;
+  // The place radius; picked on Intel with degraded scanners (docs/methods/localization.md).
+  double place_min_travel = 1.0;
+  bool kld_sampling = true;
+  double kld_epsilon = 0.05;
+  double kld_z = 2.326;  // delta = 0.01
+  double kld_bin_xy = 0.5;
+  double kld_bin_theta = 0.1745;  // 10 deg
+  double update_distance = 0.1;
+  double update_angle = 0.1;
+  bool augmented = true;
+  double alpha_slow = 0.01;
+  double alpha_fast = 0.3;  // > alpha_slow
+  double max_injection = 0.2;
+  double injection_ratio = 0.7;
+  double min_likelihood_ratio = 0.5;
+  int takeover_updates = 30;
+  int recovery_updates = 10;
+  int displaced_updates = 100;
   LocalizationStatusConfig status{};
   std::uint64_t seed = 1;
 };
+
+template <typename Fields>
+void describe(Fields& f, MclConfig& c) {
+  f.section("motion", c.motion, "the sampled odometry motion model");
+  f.choice("sensor", c.sensor, "the sensor model");
+  f.section("beam", c.beam, "for sensor: beam");
+  f.number("max_beams", c.max_beams, "1", at_least(1), "beams scored per scan");
+  f.number("likelihood_exponent", c.likelihood_exponent, "1", open_closed(0, 1), "p(z | x)^exponent");
+  f.number("usable_range", c.usable_range, "m", greater_than(0), "longer readings are treated as max-range readings");
+  f.number("min_particles", c.min_particles, "1", at_least(1), "fewest particles (KLD sampling)");
+  f.number("max_particles", c.max_particles, "1", at_least(1),
+           ">= min_particles; also the count a global start is seeded with");
+  f.section("global", c.global, "the coarse pass of a global start (global_search.hpp)");
+  f.number("max_places", c.max_places, "1", at_least(1), "candidate places seeded from the coarse pass");
+  f.number("place_radius_xy", c.place_radius_xy, "m", greater_than(0),
+           "hypotheses this close (and within place_radius_theta) are one place");
+  f.number("place_radius_theta", c.place_radius_theta, "rad", greater_than(0), "see place_radius_xy");
+  f.number("place_margin", c.place_margin, "log-likelihood", greater_than(0), "a place this far below the best is dropped");
+  f.number("place_settle_updates", c.place_settle_updates, "1", at_least(0),
+           "updates after seeding before the places' evidence counts (they settle on their best pose)");
+  f.number("place_min_travel", c.place_min_travel, "m", at_least(0),
+           "no place is dropped before the robot drove this far since seeding");
+  f.flag("kld_sampling", c.kld_sampling, "false: always max_particles");
+  f.number("kld_epsilon", c.kld_epsilon, "1", greater_than(0), "bound on the KL divergence (Fox 2003)");
+  f.number("kld_z", c.kld_z, "1", any_value(), "upper 1 - delta quantile of N(0, 1)");
+  f.number("kld_bin_xy", c.kld_bin_xy, "m", greater_than(0), "histogram bin size");
+  f.number("kld_bin_theta", c.kld_bin_theta, "rad", greater_than(0), "histogram bin size in heading");
+  f.number("update_distance", c.update_distance, "m", at_least(0), "filter update once the robot moved this far ...");
+  f.number("update_angle", c.update_angle, "rad", at_least(0), "... or turned this much");
+  f.flag("augmented", c.augmented, "random-sample injection (Gutmann & Fox 2002)");
+  f.number("alpha_slow", c.alpha_slow, "1", open_interval(0, 1), "long-term average rate (< alpha_fast)");
+  f.number("alpha_fast", c.alpha_fast, "1", open_closed(0, 1), "short-term average rate");
+  f.number("max_injection", c.max_injection, "1", between(0, 1), "cap on the injected fraction per step");
+  f.number("injection_ratio", c.injection_ratio, "1", open_closed(0, 1),
+           "inject only while w_fast < injection_ratio w_slow");
+  f.number("min_likelihood_ratio", c.min_likelihood_ratio, "1", any_value(),
+           "w_fast below this fraction of w_slow counts as implausible (status)");
+  f.number("takeover_updates", c.takeover_updates, "1", at_least(1),
+           "updates in a row the recovery set must win before it replaces the tracked set");
+  f.number("recovery_updates", c.recovery_updates, "1", at_least(1),
+           "sensor updates the recovery set searches on after the last injection");
+  f.number("displaced_updates", c.displaced_updates, "1", at_least(1),
+           "sensor updates a displaced tracked set is kept after a takeover");
+  f.section("status", c.status, "when the estimate counts as localized or lost");
+  f.number("seed", c.seed, "1", any_value(), "of every random draw");
+}
 
 /// Throws Error for values outside the ranges above.
 void validate(const MclConfig& config);

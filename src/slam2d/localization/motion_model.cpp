@@ -21,12 +21,7 @@ double noise_angle(double rotation) {
 
 }  // namespace
 
-void validate(const OdometryMotionConfig& config) {
-  for (const double value : {config.alpha1, config.alpha2, config.alpha3, config.alpha4, config.min_rotation_sigma,
-                             config.min_translation_sigma}) {
-    check(std::isfinite(value) && value >= 0.0, "odometry motion model: alphas and floors must be finite and >= 0");
-  }
-}
+void validate(const OdometryMotionConfig& config) { check_fields(config, "OdometryMotionConfig"); }
 
 OdometryControl decompose_odometry(const SE2& T_odom_previous, const SE2& T_odom_current) {
   const Eigen::Vector2d delta = T_odom_current.translation() - T_odom_previous.translation();

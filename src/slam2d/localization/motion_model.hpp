@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
@@ -24,13 +25,24 @@
 namespace slam2d {
 
 struct OdometryMotionConfig {
-  double alpha1 = 0.05;   // 1 (rad^2 / rad^2), >= 0: rotation noise from rotation
-  double alpha2 = 0.01;   // rad^2 / m^2, >= 0: rotation noise from translation
-  double alpha3 = 0.05;   // 1 (m^2 / m^2), >= 0: translation noise from translation
-  double alpha4 = 0.01;   // m^2 / rad^2, >= 0: translation noise from rotation
-  double min_rotation_sigma = 1e-3;     // rad, >= 0: floor of the rotation standard deviations
-  double min_translation_sigma = 1e-3;  // m, >= 0: floor of the translation standard deviation
+  double alpha1 = 0.05;
+  double alpha2 = 0.01;
+  double alpha3 = 0.05;
+  double alpha4 = 0.01;
+  double min_rotation_sigma = 1e-3;
+  double min_translation_sigma = 1e-3;
 };
+
+template <typename Fields>
+void describe(Fields& f, OdometryMotionConfig& c) {
+  f.number("alpha1", c.alpha1, "rad^2/rad^2", at_least(0), "rotation noise from rotation");
+  f.number("alpha2", c.alpha2, "rad^2/m^2", at_least(0), "rotation noise from translation");
+  f.number("alpha3", c.alpha3, "m^2/m^2", at_least(0), "translation noise from translation");
+  f.number("alpha4", c.alpha4, "m^2/rad^2", at_least(0), "translation noise from rotation");
+  f.number("min_rotation_sigma", c.min_rotation_sigma, "rad", at_least(0), "floor of the rotation standard deviations");
+  f.number("min_translation_sigma", c.min_translation_sigma, "m", at_least(0),
+           "floor of the translation standard deviation");
+}
 
 /// Throws Error unless every field is finite and non-negative.
 void validate(const OdometryMotionConfig& config);

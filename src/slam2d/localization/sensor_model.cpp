@@ -37,12 +37,8 @@ ScanBeams select_beams(const LaserScan& scan, int max_beams, double usable_range
 }
 
 void validate(const BeamModelConfig& config) {
-  for (const double w : {config.z_hit, config.z_short, config.z_max, config.z_rand}) {
-    check(std::isfinite(w) && w >= 0.0, "beam model: weights must be finite and >= 0");
-  }
-  check(config.z_hit + config.z_short + config.z_max + config.z_rand > 0.0, "beam model: all weights are zero");
-  check(config.sigma_hit > 0.0 && config.lambda_short > 0.0 && config.max_range_band >= 0.0,
-        "beam model: sigma_hit and lambda_short must be > 0, max_range_band >= 0");
+  check_fields(config, "BeamModelConfig");
+  check(config.z_hit + config.z_short + config.z_max + config.z_rand > 0.0, "BeamModelConfig: all weights are zero");
 }
 
 double cast_ray(const OccupancyMap& map, const Eigen::Vector2d& origin, double angle, double max_range) {

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/se2.hpp"
@@ -33,14 +34,26 @@ struct ScanBeams {
 ScanBeams select_beams(const LaserScan& scan, int max_beams, double usable_range);
 
 struct BeamModelConfig {
-  double z_hit = 0.8;          // 1, >= 0: weights of the four components (normalised internally)
-  double z_short = 0.05;       // 1, >= 0
-  double z_max = 0.05;         // 1, >= 0
-  double z_rand = 0.1;         // 1, >= 0
-  double sigma_hit = 0.2;      // m, > 0
-  double lambda_short = 0.1;   // 1/m, > 0
-  double max_range_band = 0.1; // m: readings within this of range_max count as max-range readings
+  double z_hit = 0.8;  // the four weights are normalised internally; not all zero
+  double z_short = 0.05;
+  double z_max = 0.05;
+  double z_rand = 0.1;
+  double sigma_hit = 0.2;
+  double lambda_short = 0.1;
+  double max_range_band = 0.1;
 };
+
+template <typename Fields>
+void describe(Fields& f, BeamModelConfig& c) {
+  f.number("z_hit", c.z_hit, "1", at_least(0), "weight of the Gaussian hit component");
+  f.number("z_short", c.z_short, "1", at_least(0), "weight of the short-reading component");
+  f.number("z_max", c.z_max, "1", at_least(0), "weight of the max-range component");
+  f.number("z_rand", c.z_rand, "1", at_least(0), "weight of the uniform component");
+  f.number("sigma_hit", c.sigma_hit, "m", greater_than(0), "standard deviation of the hit component");
+  f.number("lambda_short", c.lambda_short, "1/m", greater_than(0), "rate of the short-reading component");
+  f.number("max_range_band", c.max_range_band, "m", at_least(0),
+           "readings within this of range_max count as max-range readings");
+}
 
 /// Throws Error for negative weights, all-zero weights or non-positive sigma / lambda.
 void validate(const BeamModelConfig& config);

@@ -23,18 +23,10 @@ HectorSlamConfig default_tracking_config() {
 }
 
 void validate(const GraphSlamConfig& config) {
-  check(std::isfinite(config.min_range) && config.min_range >= 0.0, "graph slam: min_range must be >= 0");
-  check(std::isfinite(config.max_range) && config.max_range > config.min_range,
-        "graph slam: max_range must be > min_range");
-  validate(config.keyframes);
+  check_fields(config, "GraphSlamConfig");
+  check(config.max_range > config.min_range, "GraphSlamConfig: max_range must be > min_range");
   validate(config.tracking);
-  check(std::isfinite(config.sequential_sigma_translation) && config.sequential_sigma_translation > 0.0,
-        "graph slam: sequential_sigma_translation must be > 0");
-  check(std::isfinite(config.sequential_sigma_rotation) && config.sequential_sigma_rotation > 0.0,
-        "graph slam: sequential_sigma_rotation must be > 0");
   validate(config.loop_closure);
-  validate(config.back_end);
-  check(std::isfinite(config.map_resolution) && config.map_resolution > 0.0, "graph slam: map_resolution must be > 0");
 }
 
 GraphSlam::GraphSlam(const GraphSlamConfig& config)

@@ -46,19 +46,34 @@ namespace slam2d {
 HectorSlamConfig default_tracking_config();
 
 struct GraphSlamConfig {
-  double min_range = 0.1;   // m, shorter readings are dropped from the keyframes' clouds (robot body)
-  double max_range = 25.0;  // m, longer readings are dropped (no-return beams always are)
+  double min_range = 0.1;
+  double max_range = 25.0;  // > min_range
   KeyframeConfig keyframes{};
   // The tracker's prediction is the odometry when the scans come with it, else the last pose
   // (Hector's no-odometry settings, without the prior and the remapping): tracking.prior itself
   // is ignored.
   HectorSlamConfig tracking = default_tracking_config();
-  double sequential_sigma_translation = 0.002;  // m, > 0: standard deviations of a sequential edge
-  double sequential_sigma_rotation = 0.001;     // rad, > 0
+  double sequential_sigma_translation = 0.002;
+  double sequential_sigma_rotation = 0.001;
   LoopClosureConfig loop_closure{};
   SparsePoseAdjustmentConfig back_end{.loop_kernel = {.type = RobustKernelType::kCauchy, .scale = 3.0}};
-  double map_resolution = 0.05;  // m per cell of the occupancy map built from the keyframes
+  double map_resolution = 0.05;
 };
+
+template <typename Fields>
+void describe(Fields& f, GraphSlamConfig& c) {
+  f.number("min_range", c.min_range, "m", at_least(0), "shorter readings are dropped from the keyframes' clouds (robot body)");
+  f.number("max_range", c.max_range, "m", greater_than(0),
+           "> min_range; longer readings are dropped (no-return beams always are)");
+  f.section("keyframes", c.keyframes, "when a scan becomes a graph node");
+  f.section("tracking", c.tracking, "the scan-to-map tracker (its prior is ignored)");
+  f.number("sequential_sigma_translation", c.sequential_sigma_translation, "m", greater_than(0),
+           "standard deviation of a sequential edge's translation");
+  f.number("sequential_sigma_rotation", c.sequential_sigma_rotation, "rad", greater_than(0), "... and rotation");
+  f.section("loop_closure", c.loop_closure, "the loop closer");
+  f.section("back_end", c.back_end, "the sparse pose adjustment");
+  f.number("map_resolution", c.map_resolution, "m per cell", greater_than(0), "of the occupancy map built from the keyframes");
+}
 
 /// Throws Error for out-of-range values.
 void validate(const GraphSlamConfig& config);

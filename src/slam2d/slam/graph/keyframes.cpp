@@ -8,11 +8,7 @@
 
 namespace slam2d {
 
-void validate(const KeyframeConfig& config) {
-  check(std::isfinite(config.min_distance) && config.min_distance >= 0.0, "keyframes: min_distance must be >= 0");
-  check(std::isfinite(config.min_angle) && config.min_angle >= 0.0, "keyframes: min_angle must be >= 0");
-  check(std::isfinite(config.min_time) && config.min_time >= 0.0, "keyframes: min_time must be >= 0");
-}
+void validate(const KeyframeConfig& config) { check_fields(config, "KeyframeConfig"); }
 
 KeyframeSelector::KeyframeSelector(const KeyframeConfig& config) : config_(config) { validate(config_); }
 

@@ -10,16 +10,24 @@
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d {
 
 struct KeyframeConfig {
-  double min_distance = 0.2;  // m, >= 0
-  double min_angle = 0.2;     // rad, >= 0
-  double min_time = 10.0;     // s, >= 0; 0 disables the time rule
+  double min_distance = 0.2;
+  double min_angle = 0.2;
+  double min_time = 10.0;
 };
+
+template <typename Fields>
+void describe(Fields& f, KeyframeConfig& c) {
+  f.number("min_distance", c.min_distance, "m", at_least(0), "a new keyframe once the robot moved this far ...");
+  f.number("min_angle", c.min_angle, "rad", at_least(0), "... or turned this much ...");
+  f.number("min_time", c.min_time, "s", at_least(0), "... or this long passed; 0 disables the time rule");
+}
 
 /// A graph node's scan: its end points in the robot frame, with normals (from the scan order).
 struct Keyframe {

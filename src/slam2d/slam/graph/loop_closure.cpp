@@ -21,50 +21,19 @@ Drift drift_along(const GraphPath& path, const DriftModel& model) {
           .rotation = model.rotation_per_metre * path.distance + model.rotation_per_radian * path.turned};
 }
 
-void validate(const DriftModel& model) {
-  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  check(non_negative(model.translation_per_metre) && non_negative(model.rotation_per_metre) &&
-            non_negative(model.rotation_per_radian),
-        "loop closure: the drift model's rates must be >= 0");
-}
+void validate(const DriftModel& model) { check_fields(model, "DriftModel"); }
 
 void validate(const LargeClosureConfig& config) {
-  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  auto fraction = [](double v) { return v >= 0.0 && v <= 1.0; };
-  check(positive(config.min_translation) && positive(config.min_rotation),
-        "loop closure: large.min_translation and large.min_rotation must be > 0");
-  check(fraction(config.min_score) && fraction(config.min_inlier_fraction),
-        "loop closure: large.min_score and large.min_inlier_fraction must be in [0, 1]");
-  check(std::isfinite(config.confirm_min_distance) && config.confirm_min_distance >= 0.0 &&
-            std::isfinite(config.confirm_max_distance) && config.confirm_max_distance >= config.confirm_min_distance,
-        "loop closure: need 0 <= large.confirm_min_distance <= large.confirm_max_distance");
-  check(positive(config.confirm_tolerance) && positive(config.confirm_rotation_tolerance),
-        "loop closure: large.confirm_tolerance and large.confirm_rotation_tolerance must be > 0");
-  check(config.global_interval >= 1, "loop closure: large.global_interval must be >= 1");
-  check(positive(config.max_global_radius) && positive(config.max_global_window),
-        "loop closure: large.max_global_radius and large.max_global_window must be > 0");
-  check(config.max_global_chains >= 1, "loop closure: large.max_global_chains must be >= 1");
+  check_fields(config, "LargeClosureConfig");
+  check(config.confirm_max_distance >= config.confirm_min_distance,
+        "LargeClosureConfig: confirm_max_distance must be >= confirm_min_distance");
   validate(config.confirm_match);
   validate(config.global_coarse);
   validate(config.global_fine);
 }
 
 void validate(const LoopClosureConfig& config) {
-  check(std::isfinite(config.search_radius) && config.search_radius > 0.0, "loop closure: search_radius must be > 0");
-  check(std::isfinite(config.uncertainty_sigmas) && config.uncertainty_sigmas >= 0.0,
-        "loop closure: uncertainty_sigmas must be >= 0");
-  check(std::isfinite(config.min_path_distance) && config.min_path_distance >= 0.0,
-        "loop closure: min_path_distance must be >= 0");
-  check(std::isfinite(config.map_radius) && config.map_radius > 0.0, "loop closure: map_radius must be > 0");
-  check(std::isfinite(config.max_translation_variance) && config.max_translation_variance > 0.0,
-        "loop closure: max_translation_variance must be > 0");
-  check(config.min_chain_size >= 1, "loop closure: min_chain_size must be >= 1");
-  check(config.max_chains >= 1, "loop closure: max_chains must be >= 1");
-  check(config.max_near_chains >= 0, "loop closure: max_near_chains must be >= 0");
-  check(config.search_interval >= 1, "loop closure: search_interval must be >= 1");
-  check(config.min_inlier_fraction >= 0.0 && config.min_inlier_fraction <= 1.0,
-        "loop closure: min_inlier_fraction must be in [0, 1]");
-  validate(config.drift);
+  check_fields(config, "LoopClosureConfig");
   validate(config.match);
   validate(config.near_match);
   validate(config.large);

@@ -55,10 +55,17 @@ namespace slam2d {
 /// odometry (ACES without: 94.8 %, its tracker jumps, which is no drift), checked on FR079
 /// (99.9-100 %); see docs/methods/graph_slam.md.
 struct DriftModel {
-  double translation_per_metre = 0.0167;  // m per m travelled, >= 0
-  double rotation_per_metre = 0.0003;     // rad per m travelled, >= 0
-  double rotation_per_radian = 0.003;     // rad per rad turned, >= 0
+  double translation_per_metre = 0.0167;
+  double rotation_per_metre = 0.0003;
+  double rotation_per_radian = 0.003;
 };
+
+template <typename Fields>
+void describe(Fields& f, DriftModel& c) {
+  f.number("translation_per_metre", c.translation_per_metre, "m per m travelled", at_least(0), "translation drift");
+  f.number("rotation_per_metre", c.rotation_per_metre, "rad per m travelled", at_least(0), "rotation drift from travel");
+  f.number("rotation_per_radian", c.rotation_per_radian, "rad per rad turned", at_least(0), "rotation drift from turning");
+}
 
 /// The drift sigmas between two keyframes joined by a path.
 struct Drift {
@@ -81,19 +88,19 @@ struct LargeClosureConfig {
   // back end's Cauchy kernel (scale 3 in sigmas of >= 1 cm and 0.004 rad) it would count for next
   // to nothing, so it is confirmed and added without the kernel instead. It must also lie within
   // the drift model's uncertainty_sigmas between the keyframe and the chain.
-  double min_translation = 1.0;  // m, > 0
-  double min_rotation = 0.1;     // rad, > 0
+  double min_translation = 1.0;
+  double min_rotation = 0.1;
   // Stricter thresholds than a local closure's, for both the first and the confirming match.
-  double min_score = 0.6;            // 1, in [0, 1]: correlative response
-  double min_inlier_fraction = 0.8;  // 1, in [0, 1]: after refinement
+  double min_score = 0.6;
+  double min_inlier_fraction = 0.8;
   // The confirmation: a keyframe this far on along the path (or back, at the end of a log),
   // matched at the first closure's correction over confirm_match's small window.
-  double confirm_min_distance = 0.2;  // m, >= 0
-  double confirm_max_distance = 8.0;  // m, >= confirm_min_distance: unconfirmed by then, dropped
+  double confirm_min_distance = 0.2;
+  double confirm_max_distance = 8.0;  // >= confirm_min_distance
   // The second match must land this near the predicted pose (the motion between the two keyframes
   // is the tracker's, good to centimetres over a few metres).
-  double confirm_tolerance = 0.25;          // m, > 0
-  double confirm_rotation_tolerance = 0.05;  // rad, > 0
+  double confirm_tolerance = 0.25;
+  double confirm_rotation_tolerance = 0.05;
   MapMatchConfig confirm_match{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.5, .window_y = 0.5,
                                                .window_theta = 0.1, .angular_step = 0.004, .min_score = 0.5},
                                .refinement = {.max_correspondence_distance = 0.3},
@@ -103,10 +110,10 @@ struct LargeClosureConfig {
                                .min_score_at_window_edge = 1.0};
   // Global search.
   bool global_search = true;
-  int global_interval = 16;        // keyframes, >= 1: at most one global search per this many
-  double max_global_radius = 50.0;  // m, > 0: candidates within search_radius + the drift radius, up to this
-  double max_global_window = 25.0;  // m, > 0: translation half-width, the chain's drift radius up to this
-  int max_global_chains = 1;        // 1, >= 1: chains searched per global search, nearest first
+  int global_interval = 16;
+  double max_global_radius = 50.0;
+  double max_global_window = 25.0;
+  int max_global_chains = 1;
   // The coarse search: a 10 cm table under a 10 cm kernel, 0.57 deg steps (a point 10 m out moves
   // one cell per step), no refinement; its window is set per search.
   MapMatchConfig global_coarse{.correlative = {.resolution = 0.1, .sigma = 0.1, .angular_step = 0.01, .min_score = 0.5},
@@ -123,34 +130,59 @@ struct LargeClosureConfig {
                              .min_score_at_window_edge = 1.0};
 };
 
+template <typename Fields>
+void describe(Fields& f, LargeClosureConfig& c) {
+  f.number("min_translation", c.min_translation, "m", greater_than(0), "a closure moving the estimate farther is large ...");
+  f.number("min_rotation", c.min_rotation, "rad", greater_than(0), "... or turning it more");
+  f.number("min_score", c.min_score, "1", between(0, 1), "correlative response of both matches");
+  f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "after refinement, both matches");
+  f.number("confirm_min_distance", c.confirm_min_distance, "m", at_least(0),
+           "the confirming keyframe lies at least this far along the path");
+  f.number("confirm_max_distance", c.confirm_max_distance, "m", at_least(0),
+           ">= confirm_min_distance: unconfirmed by then, dropped");
+  f.number("confirm_tolerance", c.confirm_tolerance, "m", greater_than(0),
+           "the second match must land this near the predicted pose ...");
+  f.number("confirm_rotation_tolerance", c.confirm_rotation_tolerance, "rad", greater_than(0), "... and turned this near");
+  f.section("confirm_match", c.confirm_match, "the confirming match (small window)");
+  f.flag("global_search", c.global_search, "search over the whole drift uncertainty");
+  f.number("global_interval", c.global_interval, "keyframes", at_least(1), "at most one global search per this many");
+  f.number("max_global_radius", c.max_global_radius, "m", greater_than(0),
+           "candidates within search_radius + the drift radius, up to this");
+  f.number("max_global_window", c.max_global_window, "m", greater_than(0),
+           "translation half-width, the chain's drift radius up to this");
+  f.number("max_global_chains", c.max_global_chains, "1", at_least(1), "chains searched per global search, nearest first");
+  f.section("global_coarse", c.global_coarse, "the global search's coarse pass");
+  f.section("global_fine", c.global_fine, "the fine search around the coarse pose, with the refinement");
+}
+
 struct LoopClosureConfig {
   bool enabled = true;
   // The local search takes candidates within search_radius of the estimate (its large window
   // covers a drift up to its half-width); the global search those within search_radius plus
   // uncertainty_sigmas standard deviations of the drift between them (DriftModel), up to
   // large.max_global_radius.
-  double search_radius = 4.0;        // m, > 0
-  double uncertainty_sigmas = 3.0;   // 1, >= 0
-  double min_path_distance = 10.0;   // m, >= 0: the recent chain, left out
-  int min_chain_size = 10;           // 1, >= 1 (Karto's loop match minimum chain size)
-  int max_chains = 1;                // 1, >= 1: chains searched over the large window per keyframe, nearest first
+  double search_radius = 4.0;
+  double uncertainty_sigmas = 3.0;
+  double min_path_distance = 10.0;
+  int min_chain_size = 10;  // Karto's loop match minimum chain size
+  int max_chains = 1;
   // Chains already linked in the graph (within min_path_distance along its edges) are not searched
   // over the large window again; up to this many of them are matched over the small window per
   // keyframe instead. Off by default: small-window links to a chain already linked bent a map with
   // many revisits far more than they helped elsewhere (docs/defaults.md, with the figures).
-  int max_near_chains = 0;           // 1, >= 0
+  int max_near_chains = 0;
   // The large window is searched from every n-th keyframe (Cartographer's sampling of constraint
   // searches, deterministic); near chains from every one. Every 8th keyframe (about every 1.6 m)
   // and one chain: FR079 (many revisits) takes 8.2-8.4 s instead of 23 s with every 2nd and two
   // chains, at 0.039 m instead of 0.037 m.
-  int search_interval = 8;           // 1, >= 1
-  double min_inlier_fraction = 0.7;  // 1, in [0, 1]: after refinement
+  int search_interval = 8;
+  double min_inlier_fraction = 0.7;
   // A closure must pin the pose down (Karto's maximum variance of a loop match): in a corridor the
   // response is flat along the axis, and such a match says nothing about where along it we are.
-  double max_translation_variance = 0.01;  // m^2, > 0: largest eigenvalue of the match's translation covariance
-  bool reject_degenerate = true;           // the scene's Fisher information must constrain every direction
-  double map_radius = 15.0;          // m, > 0: chain points this far beyond the search window from the estimate are left out
-  bool delayed = false;              // delayed loop closure
+  double max_translation_variance = 0.01;
+  bool reject_degenerate = true;
+  double map_radius = 15.0;
+  bool delayed = false;
   DriftModel drift{};
   // The large window: +-4 m, +-0.35 rad. A +-90 deg window costs about 4x more (branch-and-bound
   // keeps it affordable) but on FR079 it lets symmetric rooms in: 0.087 m mean relation error
@@ -162,9 +194,34 @@ struct LoopClosureConfig {
                        .min_sigma_translation = 0.01,
                        .min_sigma_rotation = 0.004,
                        .min_score_at_window_edge = 1.0};
-  MapMatchConfig near_match{.min_score_at_window_edge = 1.0};  // for near chains: the sequential constraint's window
+  MapMatchConfig near_match{.min_score_at_window_edge = 1.0};
   LargeClosureConfig large{};
 };
+
+template <typename Fields>
+void describe(Fields& f, LoopClosureConfig& c) {
+  f.flag("enabled", c.enabled, "search for loop closures");
+  f.number("search_radius", c.search_radius, "m", greater_than(0), "candidates within this of the estimate");
+  f.number("uncertainty_sigmas", c.uncertainty_sigmas, "1", at_least(0),
+           "the global search adds this many standard deviations of the drift");
+  f.number("min_path_distance", c.min_path_distance, "m", at_least(0), "the recent chain, left out");
+  f.number("min_chain_size", c.min_chain_size, "1", at_least(1), "fewest keyframes of a chain");
+  f.number("max_chains", c.max_chains, "1", at_least(1), "chains searched over the large window per keyframe, nearest first");
+  f.number("max_near_chains", c.max_near_chains, "1", at_least(0),
+           "chains already linked matched over the small window per keyframe");
+  f.number("search_interval", c.search_interval, "1", at_least(1), "the large window is searched from every n-th keyframe");
+  f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "after refinement");
+  f.number("max_translation_variance", c.max_translation_variance, "m^2", greater_than(0),
+           "largest eigenvalue of the match's translation covariance");
+  f.flag("reject_degenerate", c.reject_degenerate, "the scene's Fisher information must constrain every direction");
+  f.number("map_radius", c.map_radius, "m", greater_than(0),
+           "chain points this far beyond the search window from the estimate are left out");
+  f.flag("delayed", c.delayed, "delayed loop closure");
+  f.section("drift", c.drift, "the odometry drift model of the global search");
+  f.section("match", c.match, "the large window's match");
+  f.section("near_match", c.near_match, "for near chains: the sequential constraint's window");
+  f.section("large", c.large, "large corrections and the global search");
+}
 
 /// How a closure was found.
 enum class LoopSearch {

@@ -13,8 +13,6 @@ namespace slam2d {
 
 namespace {
 
-bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
-
 // The scan with each reading scaled to its horizontal length under the attitude (bearings kept:
 // their change is second order in roll and pitch), for the map update of a tilted scan.
 LaserScan levelled_scan(const LaserScan& scan, const Attitude& attitude) {
@@ -38,22 +36,8 @@ MapPyramidConfig map_config(const HectorSlamConfig& config) {
 }  // namespace
 
 void validate(const HectorSlamConfig& config) {
-  check(non_negative(config.min_range) && std::isfinite(config.max_range) && config.max_range > config.min_range,
-        "HectorSlamConfig: need 0 <= min_range < max_range");
-  check(non_negative(config.update_distance) && non_negative(config.update_angle),
-        "HectorSlamConfig: update thresholds must be finite and >= 0");
-  check(non_negative(config.max_prior_dt), "HectorSlamConfig: max_prior_dt must be finite and >= 0");
-  check(non_negative(config.sweep_duration), "HectorSlamConfig: sweep_duration must be finite and >= 0");
-  check(non_negative(config.prior_information_translation) && non_negative(config.prior_information_rotation),
-        "HectorSlamConfig: prior information must be finite and >= 0");
-  check(non_negative(config.recovery_residual) && non_negative(config.recovery_residual_without_odometry),
-        "HectorSlamConfig: recovery residuals must be finite and >= 0");
-  check(non_negative(config.rotation_margin_without_odometry) && config.rotation_margin_without_odometry < 1.0,
-        "HectorSlamConfig: rotation_margin_without_odometry must be in [0, 1)");
-  check(non_negative(config.rotation_search_without_odometry),
-        "HectorSlamConfig: rotation_search_without_odometry must be finite and >= 0");
-  check(non_negative(config.prior_sigma_per_metre), "HectorSlamConfig: prior_sigma_per_metre must be finite and >= 0");
-  validate(config.prior_kernel);
+  check_fields(config, "HectorSlamConfig");
+  check(config.max_range > config.min_range, "HectorSlamConfig: max_range must be > min_range");
   validate(config.matcher);
 }
 

@@ -8,6 +8,7 @@
 // and integrate the scan into every level when the pose moved more than a distance or angle
 // threshold since the last map update. No loop closure: the map is built once, scan by scan. Deterministic.
 
+#include <array>
 #include <optional>
 
 #include "slam2d/core/covariance.hpp"
@@ -27,6 +28,10 @@ enum class MotionPrior {
   kConstantVelocity,  // last estimate * (the last estimated motion, scaled to the time step)
   kLastPose,          // the last estimate (Hector's default without odometry)
 };
+constexpr auto choices(MotionPrior) {
+  return std::array{Choice{"odometry", MotionPrior::kOdometry}, Choice{"constant_velocity", MotionPrior::kConstantVelocity},
+                    Choice{"last_pose", MotionPrior::kLastPose}};
+}
 
 struct HectorSlamConfig {
   // The map pyramid: 3 levels from 5 cm; Hector's update factors p_hit 0.9 / p_miss 0.4. No-return
@@ -36,16 +41,15 @@ struct HectorSlamConfig {
                        .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4,
                                 .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0}};
   HectorMatcherConfig matcher{};
-  double min_range = 0.1;          // m, shorter readings are dropped (robot body, dust)
-  // m, usable range for matching and mapping; longer readings are no-return. Below the far
-  // readings some logs report for no-return; picked on ACES, checked on Intel and FR079 with
-  // odometry (without odometry not robust: docs/defaults.md).
-  double max_range = 25.0;
-  double update_distance = 0.4;    // m, map update when the pose moved more than this since the last one
-  double update_angle = 0.9;       // rad, ... or turned more than this (Hector's defaults)
+  double min_range = 0.1;
+  // Below the far readings some logs report for no-return; picked on ACES, checked on Intel and
+  // FR079 with odometry (without odometry not robust: docs/defaults.md).
+  double max_range = 25.0;  // > min_range
+  double update_distance = 0.4;  // Hector's default
+  double update_angle = 0.9;     // Hector's default
   MotionPrior prior = MotionPrior::kOdometry;
-  double max_prior_dt = 1.0;       // s, constant velocity is not extrapolated over longer gaps (last pose instead)
-  double sweep_duration = 0.0;     // s, first to last beam; > 0 enables the rotational distortion correction
+  double max_prior_dt = 1.0;
+  double sweep_duration = 0.0;
   // A Gaussian prior on the translation at the odometry prediction added to the matching (not
   // in the paper), only where the odometry guard trusts the increment (never without odometry:
   // the last pose is no measurement). Without it, a small change of the input (1 cm of range
@@ -58,10 +62,10 @@ struct HectorSlamConfig {
   // the scan fixes it, and odometry headings are what fail (wheel slip in turns). Picked on ACES
   // and Intel (stall phases, range-noise seeds); FR079, the odometry faults and a fast-turning
   // simulation held out (docs/defaults.md). Zero information disables a component.
-  double prior_information_translation = 1000.0;  // 1/m^2 at rest, >= 0
-  double prior_information_rotation = 0.0;        // 1/rad^2, >= 0
-  double prior_sigma_per_metre = 0.1;             // m of translation sigma per m travelled, >= 0
-  RobustKernel prior_kernel{.type = RobustKernelType::kCauchy, .scale = 2.0};  // on the prior's Mahalanobis distance
+  double prior_information_translation = 1000.0;
+  double prior_information_rotation = 0.0;
+  double prior_sigma_per_metre = 0.1;
+  RobustKernel prior_kernel{.type = RobustKernelType::kCauchy, .scale = 2.0};
   // A catch-up's increment spans a freeze of seconds, which the per-scan sigma does not describe:
   // Intel with 3 s odometry gaps scores 0.16 m with the prior there, 0.027 m without (graph
   // SLAM's tracker keeps its weaker prior there: the sparse corrected logs need it).
@@ -69,21 +73,54 @@ struct HectorSlamConfig {
   // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
   // retried with a rotation search over every heading, and the better fit is kept. Off with
   // odometry (picked on ACES, not yet checked on a held-out log: docs/defaults.md).
-  double recovery_residual = 1.0;   // 1, >= 0; 1 never triggers (the residual is at most 1)
+  double recovery_residual = 1.0;
   // Without odometry (prior != kOdometry) these replace the settings above and the matcher's:
   // the robot may have turned far between two scans (or during a gap in the log), and in round
   // halls near-equal costs must not pull the heading away from the guess. The search range was
   // picked on Intel, ACES and FR079, the margin and the residual on ACES; none is yet checked
   // on a held-out log (docs/defaults.md).
-  double rotation_search_without_odometry = 0.4;   // rad, for matcher.rotation_search_range
-  double rotation_margin_without_odometry = 0.1;   // 1, for matcher.rotation_search_margin
-  double recovery_residual_without_odometry = 0.25;  // 1, for recovery_residual
+  double rotation_search_without_odometry = 0.4;
+  double rotation_margin_without_odometry = 0.1;
+  double recovery_residual_without_odometry = 0.25;
   // With the odometry prior, each increment is checked first (core/odometry_guard.hpp): a scan
   // whose increment is not trusted (a stall, its catch-up, a jump) is matched as without
   // odometry (the settings above, no prior, no solution remapping) from two starts, and the
   // better fit is kept (HectorSlam::untrusted_starts).
   OdometryGuardConfig odometry_guard{};
 };
+
+template <typename Fields>
+void describe(Fields& f, HectorSlamConfig& c) {
+  f.section("map", c.map, "the map pyramid (its grid.max_range is replaced by max_range)");
+  f.section("matcher", c.matcher, "the scan-to-map matcher");
+  f.number("min_range", c.min_range, "m", at_least(0), "shorter readings are dropped (robot body, dust)");
+  f.number("max_range", c.max_range, "m", greater_than(0),
+           "usable range for matching and mapping (> min_range); longer readings are no-return");
+  f.number("update_distance", c.update_distance, "m", at_least(0), "map update when the pose moved more than this since the last one ...");
+  f.number("update_angle", c.update_angle, "rad", at_least(0), "... or turned more than this");
+  f.choice("prior", c.prior, "the matcher's initial guess");
+  f.number("max_prior_dt", c.max_prior_dt, "s", at_least(0),
+           "constant velocity is not extrapolated over longer gaps (last pose instead)");
+  f.number("sweep_duration", c.sweep_duration, "s", at_least(0),
+           "first to last beam; > 0 enables the rotational distortion correction");
+  f.number("prior_information_translation", c.prior_information_translation, "1/m^2", at_least(0),
+           "information of the odometry prior on the translation at rest (0: off)");
+  f.number("prior_information_rotation", c.prior_information_rotation, "1/rad^2", at_least(0),
+           "information of the odometry prior on the heading (0: off)");
+  f.number("prior_sigma_per_metre", c.prior_sigma_per_metre, "m per m travelled", at_least(0),
+           "growth of the prior's translation sigma");
+  f.section("prior_kernel", c.prior_kernel, "on the prior's Mahalanobis distance");
+  f.flag("prior_at_catch_ups", c.prior_at_catch_ups, "keep the prior on a catch-up's increment");
+  f.number("recovery_residual", c.recovery_residual, "1", at_least(0),
+           "a match with a larger mean squared residual is retried with a rotation search; 1 never triggers");
+  f.number("rotation_search_without_odometry", c.rotation_search_without_odometry, "rad", at_least(0),
+           "matcher.rotation_search_range without odometry");
+  f.number("rotation_margin_without_odometry", c.rotation_margin_without_odometry, "1", closed_open(0, 1),
+           "matcher.rotation_search_margin without odometry");
+  f.number("recovery_residual_without_odometry", c.recovery_residual_without_odometry, "1", at_least(0),
+           "recovery_residual without odometry");
+  f.section("odometry_guard", c.odometry_guard, "the check of each odometry increment");
+}
 
 /// Extra inputs of one scan.
 struct HectorInputs {

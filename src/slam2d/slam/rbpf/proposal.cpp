@@ -13,9 +13,6 @@ namespace slam2d {
 
 namespace {
 
-bool positive(double value) { return std::isfinite(value) && value > 0.0; }
-bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
-
 // The tangent coordinates of x in the frame of `origin`: (x, y) of origin^-1 x and its angle.
 Eigen::Vector3d local_coordinates(const SE2& origin, const SE2& x) {
   const SE2 d = origin.between(x);
@@ -52,26 +49,11 @@ const LogisticTable kLogistic;
 
 }  // namespace
 
-void validate(const RbpfMotionNoise& noise) {
-  check(non_negative(noise.srr) && non_negative(noise.srt) && non_negative(noise.str) && non_negative(noise.stt),
-        "RbpfMotionNoise: srr, srt, str, stt must be finite and >= 0");
-  check(positive(noise.min_sigma_translation) && positive(noise.min_sigma_rotation),
-        "RbpfMotionNoise: the sigma floors must be positive");
-}
+void validate(const RbpfMotionNoise& noise) { check_fields(noise, "RbpfMotionNoise"); }
 
 void validate(const RbpfProposalConfig& config) {
+  check_fields(config, "RbpfProposalConfig");
   validate(config.matcher);
-  check(positive(config.likelihood_sigma), "RbpfProposalConfig: likelihood_sigma must be positive");
-  check(config.weight_gain > 0.0 && config.weight_gain <= 1.0, "RbpfProposalConfig: weight_gain must be in (0, 1]");
-  check(non_negative(config.motion_prior_weight), "RbpfProposalConfig: motion_prior_weight must be finite and >= 0");
-  check(config.likelihood_stride >= 1, "RbpfProposalConfig: likelihood_stride must be >= 1");
-  check(config.sample_radius >= 1 && config.sample_radius <= 5, "RbpfProposalConfig: sample_radius must be in [1, 5]");
-  check(positive(config.sample_step_translation) && positive(config.sample_step_rotation),
-        "RbpfProposalConfig: sample steps must be positive");
-  check(config.max_match_residual > 0.0 && config.max_match_residual <= 1.0,
-        "RbpfProposalConfig: max_match_residual must be in (0, 1]");
-  check(positive(config.max_match_translation) && positive(config.max_match_rotation),
-        "RbpfProposalConfig: match gates must be positive");
 }
 
 Eigen::Vector3d motion_sigmas(const SE2& u, const RbpfMotionNoise& noise) {

@@ -20,6 +20,7 @@
 // matching cost read as a Gaussian on the residual 1 - M.
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
 #include "slam2d/core/rng.hpp"
@@ -33,37 +34,67 @@ namespace slam2d {
 /// Odometry motion noise (standard deviations growing with the motion, as GMapping's srr, srt,
 /// str, stt), in the frame of the predicted pose.
 struct RbpfMotionNoise {
-  double srr = 0.1;                     // m per m driven: translation noise from translation
-  double srt = 0.1;                     // m per rad turned: translation noise from rotation
-  double str = 0.1;                     // rad per m driven: rotation noise from translation
-  double stt = 0.2;                     // rad per rad turned: rotation noise from rotation
-  double min_sigma_translation = 0.01;  // m, floor (> 0)
-  double min_sigma_rotation = 0.005;    // rad, floor (> 0)
+  double srr = 0.1;
+  double srt = 0.1;
+  double str = 0.1;
+  double stt = 0.2;
+  double min_sigma_translation = 0.01;
+  double min_sigma_rotation = 0.005;
 };
 
+template <typename Fields>
+void describe(Fields& f, RbpfMotionNoise& c) {
+  f.number("srr", c.srr, "m per m driven", at_least(0), "translation noise from translation");
+  f.number("srt", c.srt, "m per rad turned", at_least(0), "translation noise from rotation");
+  f.number("str", c.str, "rad per m driven", at_least(0), "rotation noise from translation");
+  f.number("stt", c.stt, "rad per rad turned", at_least(0), "rotation noise from rotation");
+  f.number("min_sigma_translation", c.min_sigma_translation, "m", greater_than(0), "floor of the translation sigma");
+  f.number("min_sigma_rotation", c.min_sigma_rotation, "rad", greater_than(0), "floor of the rotation sigma");
+}
+
 struct RbpfProposalConfig {
-  HectorMatcherConfig matcher{.rotation_search_range = 0.0};  // scan matching from x' (no multi-start)
-  // 1, sigma of the residual 1 - M in the observation likelihood, > 0. Picked on ACES, not yet
-  // checked on a held-out log (docs/defaults.md), as are weight_gain and the K poses' grid.
+  HectorMatcherConfig matcher{.rotation_search_range = 0.0};  // no multi-start
+  // Picked on ACES, not yet checked on a held-out log (docs/defaults.md), as are weight_gain and
+  // the K poses' grid.
   double likelihood_sigma = 0.3;
   // Weight tempering (GMapping's "ogain"): the weight update is log eta * weight_gain. Beams are
   // not independent, so the product over ~200 beams is far too confident; 1 is the plain filter.
-  double weight_gain = 0.03;          // 1, in (0, 1]
+  double weight_gain = 0.03;
   // The motion model as a Gaussian prior in the scan matching (x* maximises likelihood times
   // motion model, the proposal's mode); 0 matches on the likelihood alone, 1 is the exact product.
-  double motion_prior_weight = 1.0;   // 1, >= 0
-  // The likelihood of the K poses reads every likelihood_stride-th end point (scaled to all of them).
-  std::size_t likelihood_stride = 2;  // >= 1
-  int sample_radius = 1;              // K = (2 radius + 1)^3 poses around x*, in [1, 5]
-  double sample_step_translation = 0.02;  // m, grid step of the x_j in x and y, > 0
-  double sample_step_rotation = 0.01;     // rad, grid step of the x_j in theta, > 0
+  double motion_prior_weight = 1.0;
+  std::size_t likelihood_stride = 2;
+  int sample_radius = 1;
+  double sample_step_translation = 0.02;
+  double sample_step_rotation = 0.01;
   // The match is rejected (motion-model fallback) when its mean squared residual (1 - M)^2 exceeds
-  // this, when it moved the pose further than the gates from x', or when it is degenerate.
-  double max_match_residual = 0.5;    // 1, in (0, 1]
-  double max_match_translation = 1.0; // m, > 0
-  double max_match_rotation = 0.6;    // rad, > 0
-  std::size_t min_points = 20;        // end points needed to match
+  // max_match_residual, when it moved the pose further than the gates from x', or when it is
+  // degenerate.
+  double max_match_residual = 0.5;
+  double max_match_translation = 1.0;
+  double max_match_rotation = 0.6;
+  std::size_t min_points = 20;
 };
+
+template <typename Fields>
+void describe(Fields& f, RbpfProposalConfig& c) {
+  f.section("matcher", c.matcher, "scan matching from x'");
+  f.number("likelihood_sigma", c.likelihood_sigma, "1", greater_than(0),
+           "sigma of the residual 1 - M in the observation likelihood");
+  f.number("weight_gain", c.weight_gain, "1", open_closed(0, 1), "the weight update is log eta * weight_gain");
+  f.number("motion_prior_weight", c.motion_prior_weight, "1", at_least(0),
+           "weight of the motion model as a prior in the scan matching (0: off, 1: the exact product)");
+  f.number("likelihood_stride", c.likelihood_stride, "1", at_least(1),
+           "the K poses' likelihood reads every n-th end point (scaled to all of them)");
+  f.number("sample_radius", c.sample_radius, "1", between(1, 5), "K = (2 radius + 1)^3 poses around x*");
+  f.number("sample_step_translation", c.sample_step_translation, "m", greater_than(0), "grid step of the x_j in x and y");
+  f.number("sample_step_rotation", c.sample_step_rotation, "rad", greater_than(0), "grid step of the x_j in theta");
+  f.number("max_match_residual", c.max_match_residual, "1", open_closed(0, 1),
+           "a match with a larger mean squared residual is rejected");
+  f.number("max_match_translation", c.max_match_translation, "m", greater_than(0), "a match moving the pose farther is rejected");
+  f.number("max_match_rotation", c.max_match_rotation, "rad", greater_than(0), "... or turning it more");
+  f.number("min_points", c.min_points, "1", any_value(), "end points needed to match");
+}
 
 /// Throws Error for settings outside the documented ranges.
 void validate(const RbpfMotionNoise& noise);

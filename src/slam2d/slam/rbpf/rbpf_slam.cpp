@@ -23,10 +23,6 @@ struct RbpfWorkers {
 
 namespace {
 
-constexpr int kMaxThreads = 256;
-
-bool non_negative(double value) { return std::isfinite(value) && value >= 0.0; }
-
 MapPyramidConfig map_config(const RbpfConfig& config) {
   MapPyramidConfig map = config.map;
   map.grid.max_range = config.max_range;
@@ -52,20 +48,10 @@ Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
 }  // namespace
 
 void validate(const RbpfConfig& config) {
-  check(config.particles >= 1 && config.particles <= 10000, "RbpfConfig: particles must be in [1, 10000]");
-  check(config.threads >= 0 && config.threads <= kMaxThreads, "RbpfConfig: threads must be in [0, 256] (0: all)");
-  check(non_negative(config.min_range) && std::isfinite(config.max_range) && config.max_range > config.min_range,
-        "RbpfConfig: need 0 <= min_range < max_range");
-  check(non_negative(config.update_distance) && non_negative(config.update_angle) &&
-            non_negative(config.update_interval),
-        "RbpfConfig: update thresholds must be finite and >= 0");
-  check(non_negative(config.start_noise), "RbpfConfig: start_noise must be finite and >= 0");
-  check(non_negative(config.scan_odometry_prior_weight), "RbpfConfig: scan_odometry_prior_weight must be finite and >= 0");
-  validate(scan_odometry_matching(config).matcher);
-  check(config.resample_threshold >= 0.0 && config.resample_threshold <= 1.0,
-        "RbpfConfig: resample_threshold must be in [0, 1]");
+  check_fields(config, "RbpfConfig");
+  check(config.max_range > config.min_range, "RbpfConfig: max_range must be > min_range");
+  validate(scan_odometry_matching(config).matcher);  // the rotation search's number of starts
   validate(config.proposal);
-  validate(config.motion);
 }
 
 RbpfPathNode::~RbpfPathNode() {

@@ -34,11 +34,9 @@
 namespace slam2d {
 
 struct RbpfConfig {
-  int particles = 30;              // N, in [1, 10000]
-  std::uint64_t seed = 1;          // of every random draw
-  // Threads for the particles of an update (proposal, weight, map update): 0 = all hardware
-  // threads (TBB's default concurrency), 1 = serial, at most 256. The result does not depend on it.
-  int threads = 0;
+  int particles = 30;
+  std::uint64_t seed = 1;
+  int threads = 0;  // the result does not depend on it
   // The particles' maps: Hector's pyramid (3 levels from 5 cm, p_hit 0.9, p_miss 0.42, clamped to
   // [0.12, 0.999], no clearing by no-return beams); grid.max_range is replaced by max_range below.
   // A hit raises the log-odds by 2.20, a miss lowers them by 0.32. The high upper clamp (log-odds
@@ -51,20 +49,20 @@ struct RbpfConfig {
                                 .probability_min = 0.12, .probability_max = 0.999, .max_clear_range = 0.0}};
   RbpfProposalConfig proposal{};
   RbpfMotionNoise motion{};
-  double min_range = 0.1;          // m, shorter readings are dropped
-  double max_range = 25.0;         // m, usable range for matching and mapping
+  double min_range = 0.1;
+  double max_range = 25.0;  // > min_range
   // Update triggers, GMapping's linearUpdate / angularUpdate (its defaults: 1 m, 0.5 rad). These
   // were picked on ACES, not yet checked on a held-out log (docs/defaults.md).
-  double update_distance = 0.5;    // m, odometry distance that triggers an update (GMapping: linearUpdate)
-  double update_angle = 0.25;      // rad, odometry rotation that triggers one (GMapping: angularUpdate)
-  double update_interval = 0.0;    // s, time that triggers one; 0 disables (GMapping: temporalUpdate)
+  double update_distance = 0.5;
+  double update_angle = 0.25;
+  double update_interval = 0.0;
   // The scan matching of an update starts from x' (+) (start_noise sigma_u) n, n ~ N(0, I), drawn
   // per particle (GMapping's drawFromMotion); the motion prior is centred there too. 0 starts every
   // particle at x' = x_{t-1} (+) u: the particles then barely spread and none reaches the old
   // map's basin at the end of a large loop. Picked on Intel, ACES and FR079, not yet checked on a
   // held-out log (docs/defaults.md).
-  double start_noise = 0.5;        // 1, >= 0
-  double resample_threshold = 0.5; // 1, resample when N_eff < this * N, in [0, 1]
+  double start_noise = 0.5;
+  double resample_threshold = 0.5;
   // Scan-matched odometry (not in the paper): every scan is matched against the best particle's
   // map from the odometry prediction, and the matched motions replace the wheel odometry as the
   // filter's motion input u and between updates. Wheel odometry that is wrong over a few scans
@@ -74,7 +72,7 @@ struct RbpfConfig {
   // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight):
   // weak, since wheel odometry can be wrong by decimetres over one scan. Picked on FR079 and
   // ACES, not yet checked on a held-out log (docs/defaults.md).
-  double scan_odometry_prior_weight = 0.05;  // 1, >= 0
+  double scan_odometry_prior_weight = 0.05;
   // Rotation multi-start of that per-scan matching (HectorMatcherConfig::rotation_search_*): the
   // prediction turned by k * step, |k * step| <= scan_odometry_rotation_search, is matched on the
   // coarsest level too, and a turned start goes on when it lowers the cost by the margin. Wheel
@@ -82,14 +80,45 @@ struct RbpfConfig {
   // Gauss-Newton from there settles in a wrong minimum and every particle inherits the error. The
   // margin keeps repetitive rooms from snapping to a wrong heading. 0 disables it. Picked on ACES
   // and Intel, checked on FR079 (docs/defaults.md).
-  double scan_odometry_rotation_search = 0.2;  // rad, >= 0
-  double scan_odometry_rotation_step = 0.05;   // rad, > 0
-  double scan_odometry_rotation_margin = 0.2;  // 1, in [0, 1)
+  double scan_odometry_rotation_search = 0.2;
+  double scan_odometry_rotation_step = 0.05;
+  double scan_odometry_rotation_margin = 0.2;
   // Each wheel-odometry increment is checked first (core/odometry_guard.hpp); one that is not
   // trusted (a stall, a jump) is replaced by no motion, a catch-up is applied from the scan where
   // the odometry last moved, and the per-scan matching finds the motion without the prior.
   OdometryGuardConfig odometry_guard{};
 };
+
+template <typename Fields>
+void describe(Fields& f, RbpfConfig& c) {
+  f.number("particles", c.particles, "1", between(1, 10000), "N");
+  f.number("seed", c.seed, "1", any_value(), "of every random draw");
+  f.number("threads", c.threads, "1", between(0, 256),
+           "threads for the particles of an update: 0 = all hardware threads (TBB's default), 1 = serial");
+  f.section("map", c.map, "the particles' map pyramid (its grid.max_range is replaced by max_range)");
+  f.section("proposal", c.proposal, "the improved proposal");
+  f.section("motion", c.motion, "the motion model's noise");
+  f.number("min_range", c.min_range, "m", at_least(0), "shorter readings are dropped");
+  f.number("max_range", c.max_range, "m", greater_than(0), "usable range for matching and mapping (> min_range)");
+  f.number("update_distance", c.update_distance, "m", at_least(0),
+           "odometry distance that triggers an update (GMapping: linearUpdate)");
+  f.number("update_angle", c.update_angle, "rad", at_least(0),
+           "odometry rotation that triggers one (GMapping: angularUpdate)");
+  f.number("update_interval", c.update_interval, "s", at_least(0),
+           "time that triggers one; 0 disables (GMapping: temporalUpdate)");
+  f.number("start_noise", c.start_noise, "1", at_least(0), "the scan matching starts from x' (+) (start_noise sigma_u) n");
+  f.number("resample_threshold", c.resample_threshold, "1", between(0, 1), "resample when N_eff < this * N");
+  f.flag("scan_matched_odometry", c.scan_matched_odometry,
+         "match every scan against the best particle's map; the matched motions replace the wheel odometry");
+  f.number("scan_odometry_prior_weight", c.scan_odometry_prior_weight, "1", at_least(0),
+           "the motion prior's weight in that per-scan matching");
+  f.number("scan_odometry_rotation_search", c.scan_odometry_rotation_search, "rad", at_least(0),
+           "rotation multi-start of that matching (0: off)");
+  f.number("scan_odometry_rotation_step", c.scan_odometry_rotation_step, "rad", greater_than(0), "its step");
+  f.number("scan_odometry_rotation_margin", c.scan_odometry_rotation_margin, "1", closed_open(0, 1),
+           "relative cost drop a turned start needs to win");
+  f.section("odometry_guard", c.odometry_guard, "the check of each wheel-odometry increment");
+}
 
 /// Throws Error for settings outside the documented ranges.
 void validate(const RbpfConfig& config);
