@@ -115,6 +115,7 @@ std::vector<FieldRow> matcher_fields(const std::string& name) { return find_entr
 
 Matcher load_matcher(const std::string& yaml_path) {
   const ConfigNode config = ConfigNode::load(yaml_path);
+  if (config.has("method")) throw config.error("this is a method preset (for slam2d map|localize --config), not a matcher preset");
   if (!config.has("matcher")) throw config.error("a matcher preset needs a 'matcher: NAME' key");
   return make_matcher(config.at("matcher").as_string(), config);
 }

@@ -32,7 +32,11 @@ Config read_method_preset(const std::string& path, const std::string& method, Co
   const ConfigNode root = load_method_preset(path, method);
   read_config(root, config);
   try {
-    validate(config);
+    if constexpr (requires { validate(config); }) {
+      validate(config);  // the ranges and what involves several fields
+    } else {
+      check_fields(config, method);
+    }
   } catch (const ParseError&) {
     throw;
   } catch (const Error& e) {
