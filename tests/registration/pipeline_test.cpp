@@ -401,11 +401,14 @@ TEST(PipelineYaml, YamlErrorsNameFileAndLine) {
   test::expect_parse_error(load, write_file(dir, "f.yaml", "target_filters:\n  - kind: smooth\n"), 2, "smooth");
   test::expect_parse_error(load, write_file(dir, "g.yaml", "matcher: icp\n"), 1, "pipeline");
   test::expect_parse_error(load, write_file(dir, "h.yaml", "minimizer: point_to_curve\n"), 1, "point_to_curve");
-  // Out-of-range values are ParseErrors (an Error) at their filter.
+  // Out-of-range values are ParseErrors at their line.
   test::expect_parse_error(load, write_file(dir, "i.yaml", "source_filters:\n\n  - {kind: voxel, size: -0.1}\n"), 3,
-                           "size must be > 0");
+                           "'size' = -0.1 is out of range (must be > 0)");
   test::expect_parse_error(load, write_file(dir, "j.yaml", "outlier_filters:\n  - kind: trimmed\n    ratio: 1.5\n"),
-                           2, "ratio must be in (0, 1]");
+                           3, "'ratio' = 1.5 is out of range (must be in (0, 1])");
+  // What involves two fields: the file's root.
+  test::expect_parse_error(load, write_file(dir, "l.yaml", "source_filters: [{kind: range_clip, min: 5, max: 2}]\n"), 1,
+                           "max must be > min");
   test::expect_parse_error(load, write_file(dir, "k.yaml", "source_filters: 3\n"), 1, "list");
 }
 

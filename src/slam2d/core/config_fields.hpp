@@ -21,8 +21,10 @@
 //   }
 //
 // A visitor is any type with the members number(name, value, unit, range, doc) for double, int,
-// std::uint64_t and std::size_t values, flag(name, bool, doc), choice(name, enum, doc) and
-// section(name, struct, doc); its `describe` recursion into a section is its own business.
+// std::uint64_t and std::size_t values, flag(name, bool, doc), choice(name, enum, doc),
+// section(name, struct, doc) and list(name, std::vector<std::variant<...>>, doc) (a list of
+// stages such as the ICP pipeline's filters: each alternative has a static `kind` name and a
+// table); its `describe` recursion into a section or an item is its own business.
 
 #include <cmath>
 #include <cstddef>
@@ -31,6 +33,8 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <variant>
+#include <vector>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/number_text.hpp"
@@ -38,20 +42,26 @@
 namespace slam2d {
 
 /// The values a number field allows: an interval, each end open or closed, either end unbounded.
-/// Numbers are always finite.
+/// Numbers are finite unless `infinity_allowed` (then +inf, written .inf in YAML, is allowed too:
+/// "no limit").
 struct Range {
   double low = -std::numeric_limits<double>::infinity();
   double high = std::numeric_limits<double>::infinity();
   bool low_open = false;
   bool high_open = false;
+  bool infinity_allowed = false;
 
   bool contains(double value) const {
+    if (std::isinf(value) && value > 0.0 && infinity_allowed) return true;
     if (!std::isfinite(value)) return false;
     if (low_open ? !(value > low) : !(value >= low)) return false;
     return high_open ? value < high : value <= high;
   }
-  /// "any", ">= 1", "> 0", "<= 5", "in [0, 1)".
-  std::string text() const {
+  /// "any", ">= 1", "> 0", "<= 5", "in [0, 1)"; "> 0 or .inf".
+  std::string text() const { return infinity_allowed ? interval_text() + " or .inf" : interval_text(); }
+
+ private:
+  std::string interval_text() const {
     const bool bounded_low = std::isfinite(low);
     const bool bounded_high = std::isfinite(high);
     if (!bounded_low && !bounded_high) return "any";
@@ -63,6 +73,11 @@ struct Range {
 };
 
 constexpr Range any_value() { return {}; }
+/// `range`, and +inf ("no limit") too.
+constexpr Range or_infinity(Range range) {
+  range.infinity_allowed = true;
+  return range;
+}
 constexpr Range at_least(double low) { return {.low = low}; }
 constexpr Range greater_than(double low) { return {.low = low, .low_open = true}; }
 constexpr Range at_most(double high) { return {.high = high}; }
@@ -95,6 +110,14 @@ std::string_view choice_name(Enum value) {
   return "?";
 }
 
+/// "a, b, c": the `kind` of each alternative of a list's variant.
+template <typename... Kinds>
+std::string kind_list(const std::variant<Kinds...>*) {
+  std::string list;
+  ((list += (list.empty() ? "" : ", ") + std::string(Kinds::kind)), ...);
+  return list;
+}
+
 /// "a, b, c": every name of the enum, for messages and docs.
 template <typename Enum>
 std::string choice_list() {
@@ -112,7 +135,7 @@ std::string number_text(Number value) {
   if constexpr (std::is_integral_v<Number>) {
     return std::to_string(value);
   } else {
-    return format_number(value);
+    return std::isinf(value) ? (value > 0 ? ".inf" : "-.inf") : format_number(value);
   }
 }
 
@@ -139,6 +162,13 @@ class FieldChecker {
   void section(std::string_view name, Section& value, std::string_view) {
     FieldChecker inner(prefix_ + "." + std::string(name));
     describe(inner, value);
+  }
+  template <typename... Kinds>
+  void list(std::string_view name, std::vector<std::variant<Kinds...>>& items, std::string_view) {
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      FieldChecker inner(prefix_ + "." + std::string(name) + "[" + std::to_string(i) + "]");
+      std::visit([&](auto& item) { describe(inner, item); }, items[i]);
+    }
   }
 
  private:

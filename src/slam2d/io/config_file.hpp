@@ -21,6 +21,8 @@
 #include <string_view>
 #include <type_traits>
 #include <memory>
+#include <optional>
+#include <variant>
 #include <string>
 #include <utility>
 #include <vector>
@@ -112,6 +114,12 @@ class ConfigReader {
               std::string_view /*doc*/) {
     const std::string key(name);
     Number read_value = value;
+    if constexpr (std::is_floating_point_v<Number>) {
+      if (range.infinity_allowed && node_.has(key) && node_.at(key).is_scalar() && node_.at(key).as_string() == ".inf") {
+        value = std::numeric_limits<Number>::infinity();
+        return;
+      }
+    }
     if (!read_number(key, read_value)) return;
     if (!range.contains(static_cast<double>(read_value))) {
       throw node_.at(key).error("'" + key + "' = " + number_text(read_value) + " is out of range (must be " +
@@ -143,6 +151,18 @@ class ConfigReader {
     describe(inner, value);
     child.reject_unread_keys();
   }
+  /// A list of {kind: NAME, <that kind's fields>...}; present, it replaces the whole list (null: empty).
+  template <typename... Kinds>
+  void list(std::string_view name, std::vector<std::variant<Kinds...>>& items, std::string_view) {
+    const std::string key(name);
+    if (!node_.has(key)) return;
+    const ConfigNode list = node_.at(key);
+    std::vector<std::variant<Kinds...>> read_items;
+    if (!list.is_null()) {
+      for (const ConfigNode& item : list.items()) read_items.push_back(read_item<Kinds...>(item));
+    }
+    items = std::move(read_items);
+  }
 
  private:
   bool read_number(const std::string& key, double& value) const { return node_.read(key, value); }
@@ -155,6 +175,23 @@ class ConfigReader {
     if (wide > std::numeric_limits<Unsigned>::max()) throw node_.at(key).error("'" + key + "' is too large");
     value = static_cast<Unsigned>(wide);
     return true;
+  }
+  template <typename... Kinds>
+  static std::variant<Kinds...> read_item(const ConfigNode& item) {
+    using Item = std::variant<Kinds...>;
+    if (!item.is_map()) throw item.error("expected {kind: ..., ...}");
+    std::string kind;
+    if (!item.read("kind", kind)) throw item.error("a list item needs a 'kind'");
+    std::optional<Item> value;
+    ((kind == Kinds::kind ? void(value.emplace(Kinds{})) : void()), ...);
+    if (!value) {
+      throw item.at("kind").error("unknown kind '" + kind + "' (expected one of: " +
+                                  kind_list(static_cast<const Item*>(nullptr)) + ")");
+    }
+    ConfigReader inner(item);
+    std::visit([&](auto& alternative) { describe(inner, alternative); }, *value);
+    item.reject_unread_keys();
+    return *value;
   }
   const ConfigNode& node_;
 };
@@ -169,6 +206,25 @@ void read_config(const ConfigNode& node, Config& config) {
   ConfigReader reader(node);
   describe(reader, config);
   node.reject_unread_keys();
+}
+
+/// read_config(), then the struct's validate() (what involves several fields; check_fields for a
+/// struct without one), its Error turned into a ParseError at `node`: a preset that passes is a
+/// config the method accepts.
+template <typename Config>
+void read_valid_config(const ConfigNode& node, Config& config) {
+  read_config(node, config);
+  try {
+    if constexpr (requires { validate(config); }) {
+      validate(config);
+    } else {
+      check_fields(config, "config");
+    }
+  } catch (const ParseError&) {
+    throw;
+  } catch (const Error& e) {
+    throw node.error(e.what());
+  }
 }
 
 }  // namespace slam2d

@@ -21,8 +21,9 @@ std::string config_yaml(const std::vector<FieldRow>& rows, int indent) {
   std::size_t width = 0;
   for (const FieldRow& row : rows) {
     const std::string name = row.path.substr(row.path.rfind('.') == std::string::npos ? 0 : row.path.rfind('.') + 1);
-    keys.push_back(std::string(static_cast<std::size_t>(indent + 2 * row.depth), ' ') + name + ":" +
-                   (row.is_section ? "" : " " + row.value));
+    const std::size_t spaces = static_cast<std::size_t>(indent + 2 * row.depth);
+    keys.push_back(row.list_item ? std::string(spaces, ' ') + "- " + name + ": " + row.value
+                                 : std::string(spaces, ' ') + name + ":" + (row.is_section ? "" : " " + row.value));
     width = std::max(width, keys.back().size());
   }
   std::string text;
@@ -38,7 +39,7 @@ std::string config_yaml(const std::vector<FieldRow>& rows, int indent) {
 std::string config_markdown(const std::vector<FieldRow>& rows) {
   std::string text = "| field | default | unit | range | meaning |\n| --- | --- | --- | --- | --- |\n";
   for (const FieldRow& row : rows) {
-    if (row.is_section) continue;  // its fields carry the dotted path
+    if (row.is_section && row.range.empty()) continue;  // a section: its fields carry the dotted path
     std::string range = row.range;
     std::replace(range.begin(), range.end(), '|', '/');  // a choice list inside a table cell
     text += "| `" + row.path + "` | " + row.value + " | " + row.unit + " | " + range + " | " + row.doc + " |\n";

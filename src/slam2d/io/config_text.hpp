@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "slam2d/core/config_fields.hpp"
@@ -22,7 +23,8 @@ struct FieldRow {
   std::string range;   // ">= 1", "svd | quaternion"; empty for flags and sections
   std::string doc;
   int depth = 0;       // nesting of sections
-  bool is_section = false;
+  bool is_section = false;  // a section, or a non-empty list (its items follow)
+  bool list_item = false;   // the first row of a list item (its kind): "- kind: NAME" in YAML
 
   bool operator==(const FieldRow&) const = default;
 };
@@ -53,6 +55,21 @@ class FieldLister {
     rows_.push_back({path(name), "", "", "", std::string(doc), depth_, true});
     FieldLister inner(rows_, path(name), depth_ + 1);
     describe(inner, value);
+  }
+  template <typename... Kinds>
+  void list(std::string_view name, std::vector<std::variant<Kinds...>>& items, std::string_view doc) {
+    const std::string kinds = kind_list(static_cast<const std::variant<Kinds...>*>(nullptr));
+    rows_.push_back({path(name), items.empty() ? "[]" : "", "", "list of: " + kinds, std::string(doc), depth_, !items.empty()});
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const std::string item_path = path(name) + "[" + std::to_string(i) + "]";
+      std::visit(
+          [&](auto& item) {
+            rows_.push_back({item_path + ".kind", std::string(item.kind), "", kinds, "", depth_ + 1, false, true});
+            FieldLister inner(rows_, item_path, depth_ + 2);
+            describe(inner, item);
+          },
+          items[i]);
+    }
   }
 
  private:

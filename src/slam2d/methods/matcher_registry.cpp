@@ -11,7 +11,6 @@
 #include "slam2d/registration/icp.hpp"
 #include "slam2d/registration/idc.hpp"
 #include "slam2d/registration/pipeline.hpp"
-#include "slam2d/methods/pipeline_config.hpp"
 #include "slam2d/registration/pl_icp.hpp"
 #include "slam2d/registration/point_to_plane.hpp"
 #include "slam2d/registration/tangent_search.hpp"
@@ -31,8 +30,7 @@ auto cloud_matcher(MatchResult (*match)(const PointCloud2&, const PointCloud2&, 
 // preset fails at load).
 template <typename Config, typename Match>
 Matcher bind(const ConfigNode& node, Config config, Match match) {
-  read_config(node, config);
-  validate(config);
+  read_valid_config(node, config);
   return [config, match](const PointCloud2& target, const PointCloud2& source, const SE2& guess) {
     return match(target, source, guess, config);
   };
@@ -65,17 +63,7 @@ const std::vector<Entry>& entries() {
       entry("soft-icp", WeightedIcpConfig{.weighting = IcpWeighting::kSoft}, match_soft_icp),
       entry("ga-icp", GaIcpConfig{}, match_ga_icp),
       entry("correlative", CorrelativeConfig{}, cloud_matcher<CorrelativeConfig>(match_correlative)),
-      Entry{"pipeline",
-            [](const ConfigNode& n) {
-              const PipelineConfig config = n.is_null() ? PipelineConfig{} : pipeline_config_from(n);
-              validate(config);
-              return Matcher([config](const PointCloud2& target, const PointCloud2& source, const SE2& guess) {
-                return match_pipeline(target, source, guess, config);
-              });
-            },
-            []() -> std::vector<FieldRow> {
-              throw Error("the pipeline's stages are lists of filters: see configs/pipeline.yaml for its settings");
-            }},
+      entry("pipeline", PipelineConfig{}, match_pipeline),
   };
   return table;
 }

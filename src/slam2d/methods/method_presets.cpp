@@ -96,9 +96,7 @@ std::string config_table(const std::string& name) {
 
 std::vector<std::string> configurable_names() {
   std::vector<std::string> names = method_names();
-  for (const std::string& name : matcher_names()) {
-    if (name != "pipeline") names.push_back(name);
-  }
+  for (const std::string& name : matcher_names()) names.push_back(name);
   return names;
 }
 
@@ -112,8 +110,8 @@ std::string configuration_docs() {
       "or `matcher: NAME` (for `--matcher`) and any of the fields below under the same names, sections as\n"
       "nested maps. `slam2d config dump NAME` prints one with every default; unknown keys, wrong types and\n"
       "values out of range are refused with the file and line. Flags given on the command line override\n"
-      "the preset. Units: m, rad, s; 1 is dimensionless. The pipeline matcher's stages are lists of\n"
-      "filters: configs/pipeline.yaml shows them.\n";
+      "the preset. Units: m, rad, s; 1 is dimensionless. A list (the pipeline's filters) holds items\n"
+      "`{kind: NAME, ...}` with that kind's fields; given, it replaces the whole default list.\n";
   for (const std::string& name : configurable_names()) page += "\n## " + name + "\n\n" + config_table(name);
   return page;
 }

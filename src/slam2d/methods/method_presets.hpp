@@ -29,19 +29,7 @@ ConfigNode load_method_preset(const std::string& path, const std::string& method
 /// an invalid combination is a ParseError naming the file.
 template <typename Config>
 Config read_method_preset(const std::string& path, const std::string& method, Config config) {
-  const ConfigNode root = load_method_preset(path, method);
-  read_config(root, config);
-  try {
-    if constexpr (requires { validate(config); }) {
-      validate(config);  // the ranges and what involves several fields
-    } else {
-      check_fields(config, method);
-    }
-  } catch (const ParseError&) {
-    throw;
-  } catch (const Error& e) {
-    throw root.error(e.what());
-  }
+  read_valid_config(load_method_preset(path, method), config);
   return config;
 }
 

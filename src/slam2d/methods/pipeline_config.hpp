@@ -20,8 +20,9 @@
 //   median_factor: factor, quantile   normal_angle: max_angle
 // association: kind (kdtree | projective), max_distance, window; minimizer: point_to_point |
 // point_to_line | point_to_plane (the same as point_to_line); convergence: max_iterations,
-// translation, rotation, error_change. A misspelt key, a key of another kind, a wrong type or
-// an out-of-range value is a ParseError naming the file and the line.
+// translation, rotation, error_change. These are the structs' field tables (core/config_fields.hpp),
+// read by io's read_config. A misspelt key, a key of another kind, a wrong type or an
+// out-of-range value is a ParseError naming the file and the line.
 
 #include <string>
 

@@ -15,14 +15,6 @@
 namespace slam2d {
 namespace {
 
-template <typename Value>
-void require(bool ok, std::string_view stage, std::string_view field, std::string_view rule, Value value) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "pipeline: " << stage << ": " << field << " must be " << rule << " (got " << value << ")";
-  throw Error(message.str());
-}
-
 bool has_normal_angle_filter(const PipelineConfig& config) {
   for (const OutlierFilterConfig& filter : config.outlier_filters) {
     if (std::holds_alternative<NormalAngleFilter>(filter)) return true;
@@ -161,25 +153,18 @@ MatchResult summarize(Prepared& prepared, const SE2& T, const SE2& guess, bool c
 }  // namespace
 
 void validate(const AssociationConfig& association) {
-  require(association.max_distance > 0.0, "association", "max_distance", "> 0", association.max_distance);
-  require(association.window >= 0, "association", "window", ">= 0", association.window);
+  check_fields(association, "AssociationConfig");
 }
 
 void validate(const ConvergenceConfig& convergence) {
-  require(convergence.max_iterations >= 1, "convergence", "max_iterations", ">= 1", convergence.max_iterations);
-  require(convergence.translation >= 0.0, "convergence", "translation", ">= 0", convergence.translation);
-  require(convergence.rotation >= 0.0, "convergence", "rotation", ">= 0", convergence.rotation);
-  require(convergence.error_change >= 0.0, "convergence", "error_change", ">= 0", convergence.error_change);
+  check_fields(convergence, "ConvergenceConfig");
 }
 
 void validate(const PipelineConfig& config) {
+  check_fields(config, "PipelineConfig");
   for (const DataFilterConfig& filter : config.source_filters) validate(filter);
   for (const DataFilterConfig& filter : config.target_filters) validate(filter);
   for (const OutlierFilterConfig& filter : config.outlier_filters) validate(filter);
-  validate(config.association);
-  validate(config.convergence);
-  require(config.min_inliers >= 3, "config", "min_inliers", ">= 3", config.min_inliers);
-  require(config.range_sigma > 0.0, "config", "range_sigma", "> 0", config.range_sigma);
 }
 
 MatchResult match_pipeline(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,

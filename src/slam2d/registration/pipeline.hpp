@@ -24,6 +24,7 @@
 
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/match_result.hpp"
@@ -33,27 +34,47 @@
 namespace slam2d {
 
 struct ConvergenceConfig {
-  int max_iterations = 40;     // 1, minimisation steps, >= 1
-  double translation = 1e-4;   // m, >= 0; stop when a step moves less than this and turns less than
-  double rotation = 1e-4;      // rad, >= 0;  `rotation` (either 0: this check is off)
-  double error_change = 0.0;   // 1, >= 0; stop when the mean squared error changes by less than this
-                               //    fraction of the previous one (Besl & McKay's tau; 0: off)
+  int max_iterations = 40;
+  double translation = 1e-4;
+  double rotation = 1e-4;
+  double error_change = 0.0;
 
   bool operator==(const ConvergenceConfig&) const = default;
 };
 
+template <typename Fields>
+void describe(Fields& f, ConvergenceConfig& c) {
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "minimisation steps");
+  f.number("translation", c.translation, "m", at_least(0), "stop when a step moves less than this and turns less than `rotation` (either 0: off)");
+  f.number("rotation", c.rotation, "rad", at_least(0), "");
+  f.number("error_change", c.error_change, "1", at_least(0),
+           "stop when the mean squared error changes by less than this fraction of the previous one (Besl & McKay's tau; 0: off)");
+}
+
 struct PipelineConfig {
-  std::vector<DataFilterConfig> source_filters = {};                    // once per match, in order
-  std::vector<DataFilterConfig> target_filters = {NormalsFilter{}};     // once per match, in order
-  AssociationConfig association = {};                                   // step 2
-  std::vector<OutlierFilterConfig> outlier_filters = {TrimmedFilter{}};  // step 3, in order
-  Minimizer minimizer = Minimizer::kPointToLine;                        // step 4
-  ConvergenceConfig convergence = {};                                   // step 5
-  int min_inliers = 10;      // pairs, >= 3; fewer after the outlier filters: the match fails
-  double range_sigma = 0.01;  // m, > 0, range noise for the covariance (Censi 2007)
+  std::vector<DataFilterConfig> source_filters = {};
+  std::vector<DataFilterConfig> target_filters = {NormalsFilter{}};
+  AssociationConfig association = {};
+  std::vector<OutlierFilterConfig> outlier_filters = {TrimmedFilter{}};
+  Minimizer minimizer = Minimizer::kPointToLine;
+  ConvergenceConfig convergence = {};
+  int min_inliers = 10;
+  double range_sigma = 0.01;
 
   bool operator==(const PipelineConfig&) const = default;
 };
+
+template <typename Fields>
+void describe(Fields& f, PipelineConfig& c) {
+  f.list("source_filters", c.source_filters, "1. data filters on the source, once per match, in order");
+  f.list("target_filters", c.target_filters, "1. data filters on the target, once per match, in order");
+  f.section("association", c.association, "2. association");
+  f.list("outlier_filters", c.outlier_filters, "3. outlier filters, every iteration, in order");
+  f.choice("minimizer", c.minimizer, "4. error minimisation (point_to_plane: point_to_line)");
+  f.section("convergence", c.convergence, "5. convergence checks");
+  f.number("min_inliers", c.min_inliers, "pairs", at_least(3), "fewer after the outlier filters: the match fails");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance (Censi 2007)");
+}
 
 /// Throw Error naming the stage and the parameter when a value is out of range.
 void validate(const AssociationConfig& association);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <string>
 
 #include "slam2d/core/error.hpp"
@@ -12,20 +11,6 @@
 
 namespace slam2d {
 namespace {
-
-template <class... Ts>
-struct Overloaded : Ts... {
-  using Ts::operator()...;
-};
-
-// Throws Error("pipeline: <kind> filter: <field> must be <rule> (got <value>)") unless ok.
-template <typename Value>
-void require(bool ok, std::string_view kind, std::string_view field, std::string_view rule, Value value) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "pipeline: " << kind << " filter: " << field << " must be " << rule << " (got " << value << ")";
-  throw Error(message.str());
-}
 
 // Compacts the cloud in place to the points i with keep(i), in order (keep sees original indices).
 template <typename Keep>
@@ -191,60 +176,19 @@ void reject(const NormalAngleFilter& filter, const PairContext& context, std::ve
 
 }  // namespace
 
-std::string_view kind_name(const DataFilterConfig& filter) {
-  return std::visit(Overloaded{[](const RangeClipFilter&) { return std::string_view("range_clip"); },
-                               [](const VoxelGridFilter&) { return std::string_view("voxel"); },
-                               [](const RandomSubsampleFilter&) { return std::string_view("random"); },
-                               [](const NormalsFilter&) { return std::string_view("normals"); }},
-                    filter);
-}
-
-std::string_view kind_name(const OutlierFilterConfig& filter) {
-  return std::visit(Overloaded{[](const MaxDistanceFilter&) { return std::string_view("max_distance"); },
-                               [](const TrimmedFilter&) { return std::string_view("trimmed"); },
-                               [](const MedianFactorFilter&) { return std::string_view("median_factor"); },
-                               [](const NormalAngleFilter&) { return std::string_view("normal_angle"); }},
-                    filter);
-}
-
 void validate(const DataFilterConfig& filter) {
-  const std::string_view kind = kind_name(filter);
-  std::visit(Overloaded{[&](const RangeClipFilter& f) {
-                          require(f.min >= 0.0, kind, "min", ">= 0", f.min);
-                          require(f.max > f.min, kind, "max", "> min", f.max);
-                        },
-                        [&](const VoxelGridFilter& f) {
-                          require(f.size > 0.0 && std::isfinite(f.size), kind, "size", "> 0", f.size);
-                        },
-                        [&](const RandomSubsampleFilter& f) {
-                          require(f.ratio > 0.0 && f.ratio <= 1.0, kind, "ratio", "in (0, 1]", f.ratio);
-                        },
-                        [&](const NormalsFilter& f) {
-                          require(f.neighbors >= 2, kind, "neighbors", ">= 2", f.neighbors);
-                          require(f.min_neighbors >= 2, kind, "min_neighbors", ">= 2", f.min_neighbors);
-                          require(f.max_neighbor_distance > 0.0, kind, "max_neighbor_distance", "> 0",
-                                  f.max_neighbor_distance);
-                        }},
-             filter);
+  std::visit(
+      [](const auto& f) {
+        check_fields(f, "pipeline: " + std::string(f.kind) + " filter");
+        if constexpr (std::is_same_v<std::decay_t<decltype(f)>, RangeClipFilter>) {
+          check(f.max > f.min, "pipeline: range_clip filter: max must be > min");
+        }
+      },
+      filter);
 }
 
 void validate(const OutlierFilterConfig& filter) {
-  const std::string_view kind = kind_name(filter);
-  std::visit(Overloaded{[&](const MaxDistanceFilter& f) {
-                          require(f.distance > 0.0, kind, "distance", "> 0", f.distance);
-                        },
-                        [&](const TrimmedFilter& f) {
-                          require(f.ratio > 0.0 && f.ratio <= 1.0, kind, "ratio", "in (0, 1]", f.ratio);
-                        },
-                        [&](const MedianFactorFilter& f) {
-                          require(f.factor >= 1.0 && std::isfinite(f.factor), kind, "factor", ">= 1", f.factor);
-                          require(f.quantile > 0.0 && f.quantile <= 1.0, kind, "quantile", "in (0, 1]", f.quantile);
-                        },
-                        [&](const NormalAngleFilter& f) {
-                          require(f.max_angle >= 0.0 && f.max_angle <= std::numbers::pi, kind, "max_angle",
-                                  "in [0, pi]", f.max_angle);
-                        }},
-             filter);
+  std::visit([](const auto& f) { check_fields(f, "pipeline: " + std::string(f.kind) + " filter"); }, filter);
 }
 
 void apply_data_filter(PointCloud2& cloud, const DataFilterConfig& filter) {

@@ -18,6 +18,7 @@
 #include <variant>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 
@@ -28,48 +29,75 @@ namespace slam2d {
 
 /// Keeps the points whose distance from the sensor (the cloud's origin) lies in [min, max].
 struct RangeClipFilter {
-  double min = 0.0;                                       // m, >= 0
-  double max = std::numeric_limits<double>::infinity();  // m, > min
+  static constexpr std::string_view kind = "range_clip";  // in a YAML filter list
+  double min = 0.0;
+  double max = std::numeric_limits<double>::infinity();
 
   bool operator==(const RangeClipFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, RangeClipFilter& c) {
+  f.number("min", c.min, "m", at_least(0), "points nearer the sensor are dropped");
+  f.number("max", c.max, "m", or_infinity(greater_than(0)), "points at or beyond are dropped (> min)");
+}
 
 /// Replaces the points of each occupied cell of a square grid aligned with the origin (cell
 /// [i size, (i+1) size) x [j size, (j+1) size)) by their centroid; normals (if any) by their
 /// normalised mean, weights (if any) by their mean. The cells come out in the order of their
 /// first point, so a scan stays in beam order.
 struct VoxelGridFilter {
-  double size = 0.05;  // m, cell side, > 0
+  static constexpr std::string_view kind = "voxel";  // in a YAML filter list
+  double size = 0.05;
 
   bool operator==(const VoxelGridFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, VoxelGridFilter& c) {
+  f.number("size", c.size, "m", greater_than(0), "cell side");
+}
 
 /// Keeps exactly max(1, round(ratio n)) of the n points, each subset of that size equally likely
 /// (selection sampling, D. Knuth, TAOCP Vol. 2, Algorithm 3.4.2 S), in their original order.
 /// The same seed gives the same subset.
 struct RandomSubsampleFilter {
-  double ratio = 0.5;      // 1, fraction kept, in (0, 1]
-  std::uint64_t seed = 1;  // of slam2d::Rng
+  static constexpr std::string_view kind = "random";  // in a YAML filter list
+  double ratio = 0.5;
+  std::uint64_t seed = 1;
 
   bool operator==(const RandomSubsampleFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, RandomSubsampleFilter& c) {
+  f.number("ratio", c.ratio, "1", open_closed(0, 1), "fraction kept");
+  f.number("seed", c.seed, "1", any_value(), "of slam2d::Rng");
+}
 
 /// Sets the cloud's normals (the tangent's perpendicular, facing the sensor) by a line fit to
 /// the neighbours (normals.hpp): the k nearest (kd-tree) or, when `ordered`, the neighbours in
 /// scan order. Points with too few neighbours get no normal.
 struct NormalsFilter {
-  int neighbors = 5;                   // 1, points in the fit (itself included), >= 2
-  double max_neighbor_distance = 0.5;  // m, farther neighbours are left out, > 0
-  int min_neighbors = 3;               // 1, fewer points in the fit give no normal, >= 2
-  bool ordered = false;                // neighbours in scan order (the cloud must be in beam order)
+  static constexpr std::string_view kind = "normals";  // in a YAML filter list
+  int neighbors = 5;
+  double max_neighbor_distance = 0.5;
+  int min_neighbors = 3;
+  bool ordered = false;
 
   bool operator==(const NormalsFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, NormalsFilter& c) {
+  f.number("neighbors", c.neighbors, "1", at_least(2), "points in the fit (itself included)");
+  f.number("max_neighbor_distance", c.max_neighbor_distance, "m", greater_than(0), "farther neighbours are left out");
+  f.number("min_neighbors", c.min_neighbors, "1", at_least(2), "fewer points in the fit give no normal");
+  f.flag("ordered", c.ordered, "neighbours in scan order (the cloud must be in beam order)");
+}
 
 using DataFilterConfig = std::variant<RangeClipFilter, VoxelGridFilter, RandomSubsampleFilter, NormalsFilter>;
 
 /// The filter's `kind` in a YAML file: range_clip, voxel, random, normals.
-std::string_view kind_name(const DataFilterConfig& filter);
+inline std::string_view kind_name(const DataFilterConfig& filter) {
+  return std::visit([](const auto& f) { return f.kind; }, filter);
+}
 /// Throws Error naming the filter and the parameter when a value is out of range.
 void validate(const DataFilterConfig& filter);
 /// Applies one filter (validated) to the cloud in place.
@@ -90,42 +118,65 @@ struct PointPair {
 
 /// Rejects the pairs farther apart than `distance`.
 struct MaxDistanceFilter {
-  double distance = 0.5;  // m, > 0
+  static constexpr std::string_view kind = "max_distance";  // in a YAML filter list
+  double distance = 0.5;
 
   bool operator==(const MaxDistanceFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, MaxDistanceFilter& c) {
+  f.number("distance", c.distance, "m", greater_than(0), "pairs farther apart are rejected");
+}
 
 /// Keeps the max(1, round(ratio n)) closest of the n pairs (least trimmed squares, D. Chetverikov et al.,
 /// "The trimmed iterative closest point algorithm", ICPR 2002); ties at the cut are kept in order.
 struct TrimmedFilter {
-  double ratio = 0.9;  // 1, fraction kept, in (0, 1]
+  static constexpr std::string_view kind = "trimmed";  // in a YAML filter list
+  double ratio = 0.9;
 
   bool operator==(const TrimmedFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, TrimmedFilter& c) {
+  f.number("ratio", c.ratio, "1", open_closed(0, 1), "fraction of the pairs kept");
+}
 
 /// Rejects the pairs farther apart than factor x the `quantile` of the pair distances: the
 /// median factor filter of libpointmatcher with quantile 0.5, Censi's adaptive outlier rejection
 /// (CSM's outliers_adaptive_order 0.7, outliers_adaptive_mult 2) with quantile 0.7. The
 /// q-quantile of n distances is the ceil(q n)-th smallest (for an even count the lower median).
 struct MedianFactorFilter {
-  double factor = 3.0;    // 1, >= 1
-  double quantile = 0.5;  // 1, in (0, 1]
+  static constexpr std::string_view kind = "median_factor";  // in a YAML filter list
+  double factor = 3.0;
+  double quantile = 0.5;
 
   bool operator==(const MedianFactorFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, MedianFactorFilter& c) {
+  f.number("factor", c.factor, "1", at_least(1), "pairs farther than factor x the quantile are rejected");
+  f.number("quantile", c.quantile, "1", open_closed(0, 1), "0.5: the median");
+}
 
 /// Rejects the pairs whose normals (the source's rotated by T) differ by more than `max_angle`,
 /// and the pairs where either point has no normal.
 struct NormalAngleFilter {
-  double max_angle = std::numbers::pi / 4.0;  // rad, in [0, pi]
+  static constexpr std::string_view kind = "normal_angle";  // in a YAML filter list
+  double max_angle = std::numbers::pi / 4.0;
 
   bool operator==(const NormalAngleFilter&) const = default;
 };
+template <typename Fields>
+void describe(Fields& f, NormalAngleFilter& c) {
+  f.number("max_angle", c.max_angle, "rad", between(0, std::numbers::pi), "pairs whose normals differ more are rejected");
+}
 
 using OutlierFilterConfig = std::variant<MaxDistanceFilter, TrimmedFilter, MedianFactorFilter, NormalAngleFilter>;
 
 /// The filter's `kind` in a YAML file: max_distance, trimmed, median_factor, normal_angle.
-std::string_view kind_name(const OutlierFilterConfig& filter);
+inline std::string_view kind_name(const OutlierFilterConfig& filter) {
+  return std::visit([](const auto& f) { return f.kind; }, filter);
+}
 void validate(const OutlierFilterConfig& filter);
 
 /// What an outlier filter may look at besides the pairs.

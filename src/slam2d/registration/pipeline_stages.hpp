@@ -12,11 +12,13 @@
 //   for point-to-plane ICP surface registration", TR04-004, UNC 2004, Sec. 2); both by the
 //   shared solvers of closed_form.hpp.
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/covariance.hpp"
@@ -30,19 +32,32 @@ enum class AssociationKind {
   kKdTree,      // the closest target point (any cloud)
   kProjective,  // the closest within +-window places in bearing order (clouds in their sensor frames)
 };
+constexpr auto choices(AssociationKind) {
+  return std::array{Choice{"kdtree", AssociationKind::kKdTree}, Choice{"projective", AssociationKind::kProjective}};
+}
 
 struct AssociationConfig {
   AssociationKind kind = AssociationKind::kKdTree;
-  double max_distance = 1.0;  // m, > 0; no pair is formed with a closest point farther than this
-  int window = 5;             // places on either side of the bearing, >= 0 (projective only)
+  double max_distance = 1.0;
+  int window = 5;
 
   bool operator==(const AssociationConfig&) const = default;
 };
+
+template <typename Fields>
+void describe(Fields& f, AssociationConfig& c) {
+  f.choice("kind", c.kind, "the closest target point (kd-tree, any cloud) or the closest within +-window places in bearing order");
+  f.number("max_distance", c.max_distance, "m", greater_than(0), "no pair is formed with a closest point farther than this");
+  f.number("window", c.window, "places", at_least(0), "on either side of the bearing (projective only)");
+}
 
 enum class Minimizer {
   kPointToPoint,  // |T p - q|^2, closed form (Besl & McKay 1992)
   kPointToLine,   // (n_q^T (T p - q))^2 on the target normals, linear least squares (Low 2004)
 };
+constexpr auto choices(Minimizer) {
+  return std::array{Choice{"point_to_point", Minimizer::kPointToPoint}, Choice{"point_to_line", Minimizer::kPointToLine}, Choice{"point_to_plane", Minimizer::kPointToLine}};
+}
 
 /// The metric a minimiser minimises (for censi_covariance and rms_residual).
 ErrorMetric error_metric(Minimizer minimizer);
