@@ -29,6 +29,7 @@
 #include "slam2d/localization/markov_grid.hpp"
 #include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/session.hpp"
+#include "slam2d/methods/method_presets.hpp"
 
 namespace slam2d::cli {
 namespace {
@@ -40,11 +41,12 @@ struct LocalizeOptions {
   std::string initial;  // x,y,theta (m, m, rad), map frame
   std::string initial_sigma = "0.3,0.3,0.2";
   bool global = false;
-  std::size_t particles = 5000;
-  std::uint64_t seed = 1;
+  std::string config;  // a method preset (configs/<method>.yaml); empty: the defaults
+  std::optional<std::size_t> particles;  // overrides of the config when set
+  std::optional<std::uint64_t> seed;
   std::optional<double> kidnap_at;
   std::string kidnap_by = "5,0,90";
-  std::string sensor = "likelihood-field";
+  std::optional<std::string> sensor;
   CarmenReaderOptions geometry;  // FLASER geometry overrides (sensor_options.hpp)
   std::string out;
   bool json = false;
@@ -69,7 +71,9 @@ std::vector<double> parse_triple(const std::string& text, const std::string& opt
   return values;
 }
 
-std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const LocalizationMap& map) {
+// The localizer of --method with its config (defaults, --config's preset, then the flags);
+// `settings` gets what the summary reports of that config.
+std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const LocalizationMap& map, JsonObject& settings) {
   const bool has_initial = !options.initial.empty();
   check(has_initial != options.global, "localize: give exactly one of --initial x,y,theta and --global");
   check(!(options.method == "ekf" && options.global),
@@ -83,31 +87,38 @@ std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const 
     initial = SE2(pose[0], pose[1], pose[2]);
     covariance = covariance_from_sigmas(sigma[0], sigma[1], sigma[2]);
   }
+  // The method's config: the library defaults, or the preset of --config, then the flags given.
+  const auto method_config = [&](auto defaults) {
+    return options.config.empty() ? defaults : read_method_preset(options.config, options.method, defaults);
+  };
   if (options.method == "mcl") {
-    check(options.particles >= 10, "localize: --particles must be at least 10");
-    MclConfig config;
-    config.max_particles = options.particles;
-    config.min_particles = std::min<std::size_t>(config.min_particles, options.particles);
-    config.seed = options.seed;
-    config.sensor = options.sensor == "beam" ? SensorModelKind::kBeam : SensorModelKind::kLikelihoodField;
+    MclConfig config = method_config(MclConfig{});
+    if (options.particles) {
+      check(*options.particles >= 10, "localize: --particles must be at least 10");
+      config.max_particles = *options.particles;
+      config.min_particles = std::min<std::size_t>(config.min_particles, *options.particles);
+    }
+    if (options.seed) config.seed = *options.seed;
+    if (options.sensor) config.sensor = *options.sensor == "beam" ? SensorModelKind::kBeam : SensorModelKind::kLikelihoodField;
+    settings.add("particles", config.max_particles).add("sensor", config.sensor == SensorModelKind::kBeam ? "beam" : "likelihood-field");
     auto mcl = std::make_unique<MonteCarloLocalization>(map, config);
     if (has_initial) mcl->initialize(initial, covariance);
     else mcl->initialize_global();
     return mcl;
   }
-  check(options.sensor == "likelihood-field", "localize: --sensor applies to --method mcl only");
+  check(!options.sensor && !options.particles, "localize: --sensor and --particles apply to --method mcl only");
   if (options.method == "ekf") {
-    auto ekf = std::make_unique<EkfLocalization>(map);
+    auto ekf = std::make_unique<EkfLocalization>(map, method_config(EkfConfig{}));
     ekf->initialize(initial, covariance);
     return ekf;
   }
   if (options.method == "markov") {
-    auto markov = std::make_unique<MarkovGridLocalization>(map);
+    auto markov = std::make_unique<MarkovGridLocalization>(map, method_config(MarkovGridConfig{}));
     if (has_initial) markov->initialize(initial, covariance);
     else markov->initialize_global();
     return markov;
   }
-  auto hybrid = std::make_unique<HybridLocalization>(map);
+  auto hybrid = std::make_unique<HybridLocalization>(map, method_config(HybridConfig{}));
   if (has_initial) hybrid->initialize(initial, covariance);
   else hybrid->initialize_global();
   return hybrid;
@@ -116,7 +127,8 @@ std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const 
 void run_localize(const LocalizeOptions& options) {
   const RunClock clock;
   const LocalizationMap map(read_map(options.map));
-  std::unique_ptr<Localizer> localizer = make_localizer(options, map);
+  JsonObject settings;
+  std::unique_ptr<Localizer> localizer = make_localizer(options, map, settings);
   std::optional<Kidnap> kidnap;
   if (options.kidnap_at) {
     const std::vector<double> by = parse_triple(options.kidnap_by, "--kidnap-by");
@@ -148,7 +160,8 @@ void run_localize(const LocalizeOptions& options) {
   const double cpu = clock.cpu_seconds();
   JsonObject summary;
   summary.add("method", options.method).add("log", options.log).add("map", options.map);
-  if (options.method == "mcl") summary.add("particles", options.particles).add("sensor", options.sensor);
+  if (!options.config.empty()) summary.add("config", options.config);
+  summary.merge(settings);
   summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
   summary.merge(odometry_report(session.odometry_stats()));
   std::vector<std::string> warnings = reader_warnings(reader);
@@ -181,12 +194,13 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--initial-sigma", options->initial_sigma, "Standard deviations of the initial pose (m, m, rad)")
       ->capture_default_str();
   command->add_flag("--global", options->global, "Global localization from a uniform prior (not ekf)");
-  command->add_option("--particles", options->particles, "mcl: maximum particle count (KLD-sampling adapts below it)")
-      ->capture_default_str();
-  command->add_option("--sensor", options->sensor, "mcl: sensor model")
-      ->check(CLI::IsMember({"likelihood-field", "beam"}))
-      ->capture_default_str();
-  command->add_option("--seed", options->seed, "Random seed")->capture_default_str();
+  command->add_option("--config", options->config,
+                      "A method preset (configs/<method>.yaml; `slam2d config dump METHOD` prints the defaults); the flags below override it")
+      ->check(CLI::ExistingFile);
+  command->add_option("--particles", options->particles, "mcl: maximum particle count (default 5000; KLD-sampling adapts below it)");
+  command->add_option("--sensor", options->sensor, "mcl: sensor model (default likelihood-field)")
+      ->check(CLI::IsMember({"likelihood-field", "beam"}));
+  command->add_option("--seed", options->seed, "mcl: random seed (default 1)");
   command->add_option("--kidnap-at", options->kidnap_at, "s after the first scan: corrupt the odometry once (kidnap test)");
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();

@@ -18,21 +18,18 @@ void add_map_command(CLI::App& app) {
   command->add_option("--method", options->method, "Mapping method")
       ->check(CLI::IsMember(map_methods()))
       ->capture_default_str();
-  command->add_option("--resolution", options->resolution, "m per map cell")->capture_default_str();
+  command->add_option("--config", options->config,
+                      "hector, graph, rbpf: a method preset (configs/<method>.yaml; `slam2d config dump METHOD` prints the defaults); the flags below override it")
+      ->check(CLI::ExistingFile);
+  command->add_option("--resolution", options->resolution, "m per map cell (default: the method's, 0.05)");
   add_sensor_options(command, options->geometry);
   command->add_flag("--no-odometry", options->no_odometry, "hector, graph: ignore the log's odometry (initial guess: the last pose or constant velocity)");
-  command->add_option("--levels", options->levels, "hector: map pyramid levels")
-      ->check(CLI::Range(1, 16))
-      ->capture_default_str();
-  command->add_option("--particles", options->particles, "rbpf: number of particles")
-      ->check(CLI::Range(1, 10000))
-      ->capture_default_str();
-  command->add_option("--seed", options->seed, "rbpf: random seed (same log and seed give the same result)")
-      ->capture_default_str();
+  command->add_option("--levels", options->levels, "hector: map pyramid levels (default 3)")->check(CLI::Range(1, 16));
+  command->add_option("--particles", options->particles, "rbpf: number of particles (default 30)")->check(CLI::Range(1, 10000));
+  command->add_option("--seed", options->seed, "rbpf: random seed (default 1; same log and seed give the same result)");
   command->add_option("--threads", options->threads,
-                      "rbpf: threads for the particles (0: all hardware threads, 1: serial); the result does not depend on it")
-      ->check(CLI::Range(0, 256))
-      ->capture_default_str();
+                      "rbpf: threads for the particles (default 0: all hardware threads; 1: serial); the result does not depend on it")
+      ->check(CLI::Range(0, 256));
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

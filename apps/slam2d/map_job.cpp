@@ -16,6 +16,7 @@
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/methods/method_presets.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
@@ -36,7 +37,14 @@ struct MappingRun {
   std::size_t odometry_steps_reversed = 0;  // repaired by the reader (reversing integrated as forward)
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
   std::vector<std::string> warnings;  // what the reader and the method could not decide
+  double resolution = 0.0;            // m per cell of the map written
 };
+
+// The method's config: the library defaults, or the preset of --config, then the flags given.
+template <typename Config>
+Config method_config(const MapJobOptions& options, Config defaults) {
+  return options.config.empty() ? defaults : read_method_preset(options.config, options.method, defaults);
+}
 
 // The odometry guard's counts and its warning, into the run.
 void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
@@ -77,22 +85,24 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
 // Odometry mapping: every scan is placed at the robot's odometry pose at its stamp.
 MappingRun map_with_odometry(const MapJobOptions& options) {
   check(!options.no_odometry, "map: the odometry method needs odometry (drop --no-odometry)");
-  OccupancyGrid grid(OccupancyGridConfig{.resolution = options.resolution});
+  check(options.config.empty(), "map: the odometry method has no settings for --config");
+  OccupancyGrid grid(OccupancyGridConfig{.resolution = options.resolution.value_or(0.05)});
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
     grid.integrate_scan(laser.scan, laser.odom_pose);
     return laser.odom_pose;
   });
   run.map = grid.to_occupancy_map();
+  run.resolution = grid.geometry().resolution;
   return run;
 }
 
 // Hector SLAM (Kohlbrecher et al. 2011): scan-to-map matching on a map pyramid, odometry as the
 // initial guess unless --no-odometry. The map written is the finest pyramid level.
 MappingRun map_with_hector(const MapJobOptions& options) {
-  HectorSlamConfig config;
-  config.map.levels = options.levels;
-  config.map.grid.resolution = options.resolution;
-  config.prior = options.no_odometry ? MotionPrior::kLastPose : MotionPrior::kOdometry;
+  HectorSlamConfig config = method_config(options, HectorSlamConfig{});
+  if (options.levels) config.map.levels = *options.levels;
+  if (options.resolution) config.map.grid.resolution = *options.resolution;
+  if (options.no_odometry) config.prior = MotionPrior::kLastPose;
   HectorSlam slam(config);
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
     HectorInputs inputs;
@@ -100,6 +110,8 @@ MappingRun map_with_hector(const MapJobOptions& options) {
     return slam.add_scan(laser.scan, inputs).T_map_robot;
   });
   run.map = slam.map().level(0).to_occupancy_map();
+  run.resolution = config.map.grid.resolution;
+  run.method_summary.add("odometry", !options.no_odometry).add("levels", config.map.levels);
   if (!options.no_odometry) report_odometry(run, slam.odometry_stats());
   return run;
 }
@@ -107,8 +119,8 @@ MappingRun map_with_hector(const MapJobOptions& options) {
 // Graph SLAM (slam/graph): keyframes, scan-to-local-map constraints, loop closure, sparse pose
 // adjustment. The trajectory's scans between keyframes follow the odometry between them.
 MappingRun map_with_graph(const MapJobOptions& options) {
-  GraphSlamConfig config;
-  config.map_resolution = options.resolution;
+  GraphSlamConfig config = method_config(options, GraphSlamConfig{});
+  if (options.resolution) config.map_resolution = *options.resolution;
   GraphSlam slam(config);
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
     const std::optional<SE2> odometry = options.no_odometry ? std::nullopt : std::optional<SE2>(laser.odom_pose);
@@ -118,6 +130,7 @@ MappingRun map_with_graph(const MapJobOptions& options) {
   run.trajectory = slam.trajectory();
   run.map = slam.map();
   run.graph = slam.graph();
+  run.resolution = config.map_resolution;
   const GraphSlamStats& stats = slam.stats();
   run.method_summary.add("odometry", !options.no_odometry).add("keyframes", stats.keyframes);
   run.method_summary.add("loop_closures", stats.loop_closures).add("near_links", stats.near_links);
@@ -141,20 +154,21 @@ MappingRun map_with_graph(const MapJobOptions& options) {
 // particle's path, one pose per scan (scans between updates follow the scan-matched odometry).
 MappingRun map_with_rbpf(const MapJobOptions& options) {
   check(!options.no_odometry, "map: the rbpf method needs odometry (drop --no-odometry)");
-  RbpfConfig config;
-  config.particles = options.particles;
-  config.seed = options.seed;
-  config.threads = options.threads;
-  config.map.grid.resolution = options.resolution;
+  RbpfConfig config = method_config(options, RbpfConfig{});
+  if (options.particles) config.particles = *options.particles;
+  if (options.seed) config.seed = *options.seed;
+  if (options.threads) config.threads = *options.threads;
+  if (options.resolution) config.map.grid.resolution = *options.resolution;
   RbpfSlam slam(config);
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
     return slam.add_scan(laser.scan, laser.odom_pose).T_map_robot;
   });
   run.trajectory = slam.trajectory();
   run.map = slam.map().to_occupancy_map();
+  run.resolution = config.map.grid.resolution;
   const RbpfStats& stats = slam.stats();
-  run.method_summary.add("particles", options.particles).add("seed", static_cast<std::size_t>(options.seed));
-  run.method_summary.add("threads", options.threads);
+  run.method_summary.add("particles", config.particles).add("seed", static_cast<std::size_t>(config.seed));
+  run.method_summary.add("threads", config.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
   report_odometry(run, slam.odometry_stats());
@@ -195,9 +209,9 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   const auto& methods = map_methods();
   check(std::find(methods.begin(), methods.end(), options.method) != methods.end(),
         "map: unknown method '" + options.method + "' (known: odometry, hector, graph, rbpf)");
-  check(options.particles >= 1 && options.particles <= 10000, "map: --particles must be in [1, 10000]");
-  check(options.resolution > 0.0 && options.resolution <= 10.0, "map: --resolution must be in (0, 10] m");
-  check(options.levels >= 1 && options.levels <= 16, "map: --levels must be in [1, 16]");
+  check(!options.particles || (*options.particles >= 1 && *options.particles <= 10000), "map: --particles must be in [1, 10000]");
+  check(!options.resolution || (*options.resolution > 0.0 && *options.resolution <= 10.0), "map: --resolution must be in (0, 10] m");
+  check(!options.levels || (*options.levels >= 1 && *options.levels <= 16), "map: --levels must be in [1, 16]");
   const RunClock clock;
   MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();
@@ -208,9 +222,9 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("data_duration_s", run.data_duration).add("cpu_s", cpu).add("wall_s", wall);
   summary.add("realtime_factor", cpu > 0.0 ? std::optional<double>(run.data_duration / cpu) : std::nullopt);
   summary.add("us_per_scan", 1e6 * cpu / static_cast<double>(run.trajectory.size()));
-  if (options.method == "hector") summary.add("odometry", !options.no_odometry).add("levels", options.levels);
+  if (!options.config.empty()) summary.add("config", options.config);
   summary.merge(run.method_summary);
-  summary.add("resolution", options.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
+  summary.add("resolution", run.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());

@@ -17,12 +17,14 @@ struct MapJobOptions {
   std::string log;                  // CARMEN log, plain or .gz
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
   std::string method = "odometry";  // odometry, hector, graph, rbpf
-  double resolution = 0.05;         // m per cell
+  std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
   bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
-  int levels = 3;                   // hector: map pyramid levels, in [1, 16]
-  int particles = 30;               // rbpf: number of particles, in [1, 10000]
-  std::uint64_t seed = 1;           // rbpf: seed of every random draw (same log + seed, same result)
-  int threads = 0;                  // rbpf: threads for the particles, in [0, 256] (0: all hardware threads); same result
+  // Overrides of the method's config (preset or defaults) when set:
+  std::optional<double> resolution;      // m per cell (odometry: 0.05 when unset)
+  std::optional<int> levels;             // hector: map pyramid levels, in [1, 16]
+  std::optional<int> particles;          // rbpf: number of particles, in [1, 10000]
+  std::optional<std::uint64_t> seed;     // rbpf: seed of every random draw (same log + seed, same result)
+  std::optional<int> threads;            // rbpf: threads for the particles, in [0, 256] (0: all hardware threads); same result
   bool quiet = false;               // no progress line
   CarmenReaderOptions geometry;     // FLASER/RLASER geometry overrides (sensor_options.hpp); unset: PARAM, else convention
 };

@@ -23,7 +23,7 @@
 #include "slam2d/eval/statistics.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/trajectory_io.hpp"
-#include "slam2d/registration/matcher_registry.hpp"
+#include "slam2d/methods/matcher_registry.hpp"
 
 namespace slam2d::cli {
 namespace {

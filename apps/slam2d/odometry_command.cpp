@@ -19,7 +19,7 @@
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/config_file.hpp"
 #include "slam2d/io/trajectory_io.hpp"
-#include "slam2d/registration/matcher_registry.hpp"
+#include "slam2d/methods/matcher_registry.hpp"
 #include "slam2d/registration/scan_odometry.hpp"
 
 namespace slam2d::cli {

@@ -30,7 +30,7 @@
 #include "bench_data.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/rng.hpp"
-#include "slam2d/registration/matcher_registry.hpp"
+#include "slam2d/methods/matcher_registry.hpp"
 #include "slam2d/sim/laser_model.hpp"
 #include "slam2d/sim/ray_caster.hpp"
 #include "slam2d/sim/world.hpp"

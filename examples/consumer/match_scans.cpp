@@ -7,7 +7,7 @@
 
 #include <slam2d/core/laser_scan.hpp>
 #include <slam2d/core/rng.hpp>
-#include <slam2d/registration/matcher_registry.hpp>
+#include <slam2d/methods/matcher_registry.hpp>
 #include <slam2d/sim/laser_model.hpp>
 #include <slam2d/sim/office_world.hpp>
 #include <slam2d/sim/ray_caster.hpp>

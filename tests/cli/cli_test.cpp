@@ -33,6 +33,11 @@ std::string flaser_line(int beams, const std::string& range, double stamp) {
   return line + " 0 0 0 0 0 0 " + std::to_string(stamp) + " host " + std::to_string(stamp) + "\n";
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 // A simulated log shared by the tests of this file (simulated once).
 class CliTest : public ::testing::Test {
  protected:
@@ -307,6 +312,47 @@ TEST(CliErrors, MapYamlWithMissingImageIsNamed) {
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_EQ(result.errors.rfind(yaml + ":1: ", 0), 0u) << result.errors;
   EXPECT_NE(result.errors.find("nothere.pgm"), std::string::npos) << result.errors;
+}
+
+TEST_F(CliTest, MapReadsAMethodPresetAndTheFlagsOverrideIt) {
+  TempDir dir;
+  std::ofstream(dir.file("graph.yaml")) << "method: graph\nmap_resolution: 0.1\n";
+  const std::string base = "map " + log() + " --method graph --config " + dir.file("graph.yaml") + " --json --quiet";
+  const CommandResult preset = run_command(slam2d(base + " --out " + dir.file("a")));
+  ASSERT_EQ(preset.exit_code, 0) << preset.errors;
+  EXPECT_EQ(json_number(preset.output, "resolution"), 0.1) << preset.output;
+  const CommandResult flag = run_command(slam2d(base + " --resolution 0.2 --out " + dir.file("b")));
+  ASSERT_EQ(flag.exit_code, 0) << flag.errors;
+  EXPECT_EQ(json_number(flag.output, "resolution"), 0.2) << flag.output;
+  // `config dump` writes a preset that map reads back to the defaults: the same trajectory as none.
+  const CommandResult dump = run_command(slam2d("config dump hector"));
+  ASSERT_EQ(dump.exit_code, 0) << dump.errors;
+  std::ofstream(dir.file("hector.yaml")) << dump.output;
+  const std::string hector = "map " + log() + " --method hector --quiet --out ";
+  ASSERT_EQ(run_command(slam2d(hector + dir.file("c") + " --config " + dir.file("hector.yaml"))).exit_code, 0);
+  ASSERT_EQ(run_command(slam2d(hector + dir.file("d"))).exit_code, 0);
+  EXPECT_EQ(read_text(dir.file("c/trajectory.txt")), read_text(dir.file("d/trajectory.txt")));
+}
+
+TEST_F(CliTest, ABadPresetStopsMapAndLocalizeAtItsLineWithoutOutput) {
+  TempDir dir;
+  std::ofstream(dir.file("typo.yaml")) << "method: graph\nmap_resolutoin: 0.1\n";
+  std::ofstream(dir.file("other.yaml")) << "method: rbpf\nparticles: 10\n";
+  for (const std::string preset : {"typo.yaml", "other.yaml"}) {
+    const CommandResult result =
+        run_command(slam2d("map " + log() + " --method graph --quiet --config " + dir.file(preset) + " --out " + dir.file("o")));
+    EXPECT_EQ(result.exit_code, 1) << preset;
+    EXPECT_NE(result.errors.find(preset + ":"), std::string::npos) << result.errors;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("o")));
+  }
+  ASSERT_EQ(run_command(slam2d("map " + log() + " --method odometry --quiet --out " + dir.file("map"))).exit_code, 0);
+  std::ofstream(dir.file("ekf.yaml")) << "method: ekf\nno_such_setting: 1\n";
+  const CommandResult localize = run_command(slam2d("localize " + log() + " --map " + dir.file("map/map.yaml") +
+                                                    " --method ekf --initial 0,0,0 --quiet --config " + dir.file("ekf.yaml") +
+                                                    " --out " + dir.file("t.txt")));
+  EXPECT_EQ(localize.exit_code, 1);
+  EXPECT_NE(localize.errors.find("ekf.yaml:2"), std::string::npos) << localize.errors;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("t.txt")));
 }
 
 TEST(CliErrors, UnknownMethodAndMissingOptionsAreRefused) {

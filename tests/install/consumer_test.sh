@@ -11,7 +11,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
-test -f "$work/prefix/include/slam2d/registration/matcher_registry.hpp"
+test -f "$work/prefix/include/slam2d/methods/matcher_registry.hpp"
 test -f "$work/prefix/lib/cmake/slam2d/slam2dConfig.cmake" || test -f "$work/prefix/lib/x86_64-linux-gnu/cmake/slam2d/slam2dConfig.cmake"
 cmake -S "$source/examples/consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >/dev/null

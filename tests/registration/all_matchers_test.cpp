@@ -15,7 +15,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/io/config_file.hpp"
-#include "slam2d/registration/matcher_registry.hpp"
+#include "slam2d/methods/matcher_registry.hpp"
 
 namespace slam2d {
 namespace {

@@ -17,7 +17,7 @@
 #include "slam2d/core/rng.hpp"
 #include "slam2d/registration/pipeline.hpp"
 #include "slam2d/registration/normals.hpp"
-#include "slam2d/registration/pipeline_config.hpp"
+#include "slam2d/methods/pipeline_config.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {

@@ -131,8 +131,7 @@ TEST(TangentSearch, ReadsEveryFieldOfAPreset) {
       "translation_tolerance: 0.001\nrotation_tolerance: 0.0001\nmin_correspondences: 8\nrange_sigma: 0.02\n",
       "tangent.yaml");
   TangentSearchConfig config;
-  read_fields(node, config);
-  EXPECT_NO_THROW(node.reject_unread_keys());
+  read_config(node, config);  // its field table; every key known
   EXPECT_EQ(config.tangent_neighbors, 9);
   EXPECT_EQ(config.tangent_max_distance, 0.4);
   EXPECT_EQ(config.histogram_bins, 90);
@@ -148,7 +147,8 @@ TEST(TangentSearch, ReadsEveryFieldOfAPreset) {
   EXPECT_EQ(config.rotation_tolerance, 0.0001);
   EXPECT_EQ(config.min_correspondences, 8);
   EXPECT_EQ(config.range_sigma, 0.02);
-  EXPECT_THROW(read_fields(ConfigNode::parse("histogram_bins: many\n", "bad.yaml"), config), ParseError);
+  EXPECT_THROW(read_config(ConfigNode::parse("histogram_bins: many\n", "bad.yaml"), config), ParseError);
+  EXPECT_THROW(read_config(ConfigNode::parse("histogram_bins: 4\n", "range.yaml"), config), ParseError);  // >= 8
 }
 
 }  // namespace

@@ -23,6 +23,8 @@ struct FieldRow {
   std::string doc;
   int depth = 0;       // nesting of sections
   bool is_section = false;
+
+  bool operator==(const FieldRow&) const = default;
 };
 
 /// The visitor that lists the fields in table order.

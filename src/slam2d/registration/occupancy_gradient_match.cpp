@@ -11,23 +11,9 @@
 namespace slam2d {
 
 void validate(const HectorMatcherConfig& config) {
-  check(config.coarse_iterations >= 1 && config.fine_iterations >= 1,
-        "HectorMatcherConfig: iteration counts must be >= 1");
-  check(std::isfinite(config.max_rotation_step) && config.max_rotation_step > 0.0 &&
-            std::isfinite(config.max_translation_step) && config.max_translation_step > 0.0,
-        "HectorMatcherConfig: max_rotation_step and max_translation_step must be positive");
-  check(std::isfinite(config.convergence_step) && config.convergence_step >= 0.0,
-        "HectorMatcherConfig: convergence_step must be >= 0");
-  check(std::isfinite(config.rotation_search_range) && config.rotation_search_range >= 0.0 &&
-            std::isfinite(config.rotation_search_step) && config.rotation_search_step > 0.0,
-        "HectorMatcherConfig: rotation search range must be >= 0 and its step > 0");
-  check(config.rotation_search_margin >= 0.0 && config.rotation_search_margin < 1.0,
-        "HectorMatcherConfig: rotation_search_margin must be in [0, 1)");
-  check(config.degeneracy_ratio >= 0.0 && config.degeneracy_ratio < 1.0,
-        "HectorMatcherConfig: degeneracy_ratio must be in [0, 1)");
+  check_fields(config, "HectorMatcherConfig");
   check(config.rotation_search_range / config.rotation_search_step <= 100.0,
         "HectorMatcherConfig: more than 201 rotation search starts");
-  if (config.kernel.type != RobustKernelType::kNone) validate(config.kernel);
 }
 
 NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,

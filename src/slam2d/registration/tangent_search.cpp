@@ -181,24 +181,6 @@ void validate(const TangentSearchConfig& c) {
   check(c.max_distance_final <= c.max_distance_initial, "TangentSearchConfig: max_distance_final must be <= max_distance_initial");
 }
 
-void read_fields(const ConfigNode& node, TangentSearchConfig& config) {
-  node.read("tangent_neighbors", config.tangent_neighbors);
-  node.read("tangent_max_distance", config.tangent_max_distance);
-  node.read("histogram_bins", config.histogram_bins);
-  node.read("histogram_sigma", config.histogram_sigma);
-  node.read("max_rotation", config.max_rotation);
-  node.read("max_iterations", config.max_iterations);
-  node.read("max_distance_initial", config.max_distance_initial);
-  node.read("max_distance_final", config.max_distance_final);
-  node.read("max_distance_decay", config.max_distance_decay);
-  node.read("max_tangent_difference", config.max_tangent_difference);
-  node.read("rotation_search_width", config.rotation_search_width);
-  node.read("translation_tolerance", config.translation_tolerance);
-  node.read("rotation_tolerance", config.rotation_tolerance);
-  node.read("min_correspondences", config.min_correspondences);
-  node.read("range_sigma", config.range_sigma);
-}
-
 double tangent_histogram_rotation(const PointCloud2& target, const PointCloud2& source, double guess_rotation,
                                   const TangentSearchConfig& config) {
   validate(config);

@@ -30,7 +30,6 @@
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
-#include "slam2d/io/config_file.hpp"
 #include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
@@ -75,8 +74,6 @@ void describe(Fields& f, TangentSearchConfig& c) {
 /// Throws Error naming the first invalid field.
 void validate(const TangentSearchConfig& config);
 
-/// Reads the fields of a preset under their own names (for the matcher registry).
-void read_fields(const ConfigNode& node, TangentSearchConfig& config);
 
 /// Lu & Milios Sec. 3: rotation from the tangent directions, translation by least squares.
 MatchResult match_tangent_search(const PointCloud2& target, const PointCloud2& source,

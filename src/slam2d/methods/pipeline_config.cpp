@@ -1,4 +1,4 @@
-#include "slam2d/registration/pipeline_config.hpp"
+#include "slam2d/methods/pipeline_config.hpp"
 
 #include <string>
 #include <utility>

@@ -3,12 +3,14 @@
 // (configs/<name>.yaml): what the CLI, the benchmarks and the all-matchers test suite use.
 //
 // A preset file holds `matcher: <name>` and the fields of that matcher's config struct under the
-// same names; unknown keys and wrong types are ParseErrors naming the file and line.
+// same names, read by the struct's field table (core/config_fields.hpp); unknown keys, wrong
+// types and values out of range are ParseErrors naming the file and line.
 
 #include <string>
 #include <vector>
 
 #include "slam2d/io/config_file.hpp"
+#include "slam2d/io/config_text.hpp"
 #include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
@@ -21,6 +23,8 @@ Matcher make_matcher(const std::string& name);
 /// The matcher `name` configured by the keys of `config` (a `matcher` key, if present, must
 /// name the same matcher).
 Matcher make_matcher(const std::string& name, const ConfigNode& config);
+/// The fields of matcher `name`'s config with its defaults (`slam2d config dump NAME`).
+std::vector<FieldRow> matcher_fields(const std::string& name);
 /// The matcher a preset file names in its `matcher` key, configured by the file.
 Matcher load_matcher(const std::string& yaml_path);
 
