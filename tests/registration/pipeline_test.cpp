@@ -223,7 +223,7 @@ TEST(PipelineStages, AssociationAgreesWithBruteForce) {
                                    .window = static_cast<int>(pair.target.size())};
     const TargetIndex index(pair.target, config);
     std::vector<PointPair> pairs;
-    index.associate(moved, pairs);
+    index.associate(pair.source.points, pair.T_target_source, pairs);
     ASSERT_EQ(pairs.size(), expected.size());
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       EXPECT_EQ(pairs[k].source, expected[k].source);
@@ -233,7 +233,7 @@ TEST(PipelineStages, AssociationAgreesWithBruteForce) {
   // A narrow window finds the same closest point for nearly every point of a small motion.
   const TargetIndex narrow(pair.target, {.kind = AssociationKind::kProjective, .max_distance = max_distance, .window = 3});
   std::vector<PointPair> pairs;
-  narrow.associate(moved, pairs);
+  narrow.associate(pair.source.points, pair.T_target_source, pairs);
   std::size_t same = 0;
   for (const PointPair& p : pairs) {
     same += std::count_if(expected.begin(), expected.end(),
@@ -250,22 +250,21 @@ TEST(PipelineStages, MinimizersRecoverAnExactMotion) {
   for (int i = 0; i <= 20; ++i) target.points.emplace_back(-2.0, 1.0 + 0.1 * i);
   estimate_normals(target);
   const SE2 motion(0.05, -0.03, 0.02);
-  std::vector<Point2> moved;
+  PointCloud2 source;
   std::vector<PointPair> pairs;
   for (std::size_t j = 0; j < target.size(); ++j) {
-    moved.push_back(motion.inverse() * target.points[j]);
-    pairs.push_back({j, j, (moved.back() - target.points[j]).squaredNorm()});
+    source.points.push_back(motion.inverse() * target.points[j]);
+    pairs.push_back({j, j, (source.points.back() - target.points[j]).squaredNorm()});
   }
+  keep_pairs_with_normals(target, pairs);
   PairedPoints paired;
-  const auto p2p = minimize_step(Minimizer::kPointToPoint, target, moved, pairs, paired);
+  const auto p2p = minimize_step(Minimizer::kPointToPoint, target, source, SE2(), pairs, paired);
   ASSERT_TRUE(p2p);
   EXPECT_TRUE(p2p->step.is_approx(motion, 1e-12)) << p2p->step;
   // Point-to-line: the small-angle step lands within O(theta^2) and converges on iteration.
   SE2 T;
   for (int k = 0; k < 5; ++k) {
-    std::vector<Point2> current;
-    for (const Point2& p : moved) current.push_back(T * p);
-    const auto step = minimize_step(Minimizer::kPointToLine, target, current, pairs, paired);
+    const auto step = minimize_step(Minimizer::kPointToLine, target, source, T, pairs, paired);
     ASSERT_TRUE(step);
     T = step->step * T;
   }

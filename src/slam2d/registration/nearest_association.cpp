@@ -64,7 +64,7 @@ PointCloud2 with_normals(const PointCloud2& target, const KdTree2& tree, const N
 
 void finish_match(const PointCloud2& target, const PointCloud2& source,
                   const std::vector<Correspondence>& correspondences, ErrorMetric metric,
-                  std::size_t min_correspondences, MatchResult& result) {
+                  std::size_t min_correspondences, MatchResult& result, const SensorNoise& noise) {
   result.inliers = correspondences.size();
   result.residual = correspondences.empty()
                         ? 0.0
@@ -74,7 +74,7 @@ void finish_match(const PointCloud2& target, const PointCloud2& source,
     result.degenerate = true;
     return;
   }
-  result.covariance = censi_covariance(target, source, result.T_target_source, correspondences, metric);
+  result.covariance = censi_covariance(target, source, result.T_target_source, correspondences, metric, noise);
   apply(analyze_degeneracy(target, source, result.T_target_source, correspondences), result);
 }
 

@@ -1,5 +1,6 @@
 #pragma once
-// The steps the closest-point matchers share (icp.cpp, trimmed_icp.cpp, point_to_plane.cpp):
+// The steps the closest-point matchers share (icp.cpp, trimmed_icp.cpp, point_to_plane.cpp, and
+// the stages of the modular pipeline, pipeline_stages.cpp and pipeline.cpp):
 // closest-point association by kd-tree with distance rejection (Besl & McKay 1992, Sec. III-A:
 // y = C(p, X), the closest model point), gathering the pairs for a closed-form solver
 // (closed_form.hpp), and filling a MatchResult from the final correspondences.
@@ -51,7 +52,7 @@ PointCloud2 with_normals(const PointCloud2& target, const KdTree2& tree, const N
 /// covariance stays huge and the match is flagged degenerate. `target` must carry normals.
 void finish_match(const PointCloud2& target, const PointCloud2& source,
                   const std::vector<Correspondence>& correspondences, ErrorMetric metric,
-                  std::size_t min_correspondences, MatchResult& result);
+                  std::size_t min_correspondences, MatchResult& result, const SensorNoise& noise = {});
 
 /// The result of a match that could not start (too few points) or failed after `iterations`:
 /// the guess, not converged, huge covariance, degenerate.

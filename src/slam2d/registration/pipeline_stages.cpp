@@ -7,6 +7,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/closed_form.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
@@ -64,20 +65,20 @@ std::size_t TargetIndex::closest_projective(const Point2& query, double& squared
   return best;
 }
 
-void TargetIndex::associate(const std::vector<Point2>& moved, std::vector<PointPair>& pairs) const {
+void TargetIndex::associate(const std::vector<Point2>& source_points, const SE2& T_target_source,
+                            std::vector<PointPair>& pairs) const {
+  if (tree_) {
+    associate_closest(*tree_, source_points, T_target_source, config_.max_distance, pairs);  // the matchers' own
+    return;
+  }
   pairs.clear();
   if (target_->empty()) return;
+  const Eigen::Matrix2d R = T_target_source.rotation();
+  const Point2& t = T_target_source.translation();
   const double max2 = config_.max_distance * config_.max_distance;
-  for (std::size_t i = 0; i < moved.size(); ++i) {
+  for (std::size_t i = 0; i < source_points.size(); ++i) {
     double d2 = 0.0;
-    std::size_t j = 0;
-    if (tree_) {
-      const Neighbor nearest = tree_->nearest(moved[i]);
-      j = nearest.index;
-      d2 = nearest.squared_distance;
-    } else {
-      j = closest_projective(moved[i], d2);
-    }
+    const std::size_t j = closest_projective(R * source_points[i] + t, d2);
     if (d2 <= max2) pairs.push_back({i, j, d2});
   }
 }
@@ -86,52 +87,40 @@ namespace {
 
 // Besl & McKay 1992, Sec. III-C: the exact minimiser of sum |T m_i - q_i|^2 over rigid motions
 // (closed_form.hpp, by SVD: the same as the quaternion to rounding).
-std::optional<MinimizerStep> point_to_point_step(const PointCloud2& target, const std::vector<Point2>& moved,
+std::optional<MinimizerStep> point_to_point_step(const PointCloud2& target, const PointCloud2& source, const SE2& T,
                                                  const std::vector<PointPair>& pairs, PairedPoints& paired) {
   if (pairs.size() < 2) return std::nullopt;
-  paired.target.clear();
-  paired.source.clear();
+  gather_pairs(pairs, target, source, T, paired.target, paired.source);
   double error = 0.0;
-  for (const PointPair& pair : pairs) {
-    paired.source.push_back(moved[pair.source]);
-    paired.target.push_back(target.points[pair.target]);
-    error += pair.squared_distance;
-  }
+  for (const PointPair& pair : pairs) error += pair.squared_distance;
   const SE2 step = solve_point_to_point_svd(paired.target, paired.source);
   return MinimizerStep{step, error / static_cast<double>(pairs.size())};
 }
 
 // Low 2004, Sec. 2, in the plane: with R(theta) m ~ m + theta J m the residual n^T (R m + t - q)
-// is linear in (theta, t_x, t_y); the least-squares step by the pseudo-inverse (closed_form.hpp).
-std::optional<MinimizerStep> point_to_line_step(const PointCloud2& target, const std::vector<Point2>& moved,
+// is linear in (theta, t_x, t_y); the least-squares step by the pseudo-inverse (closed_form.hpp),
+// the same solve as match_point_to_plane's.
+std::optional<MinimizerStep> point_to_line_step(const PointCloud2& target, const PointCloud2& source, const SE2& T,
                                                 const std::vector<PointPair>& pairs, PairedPoints& paired) {
-  paired.target.clear();
-  paired.source.clear();
-  paired.normals.clear();
+  if (pairs.size() < 3) return std::nullopt;
+  gather_pairs(pairs, target, source, T, paired.target, paired.source, &paired.normals);
   double error = 0.0;
-  for (const PointPair& pair : pairs) {
-    if (!has_normal(target, pair.target)) continue;
-    const Point2& q = target.points[pair.target];
-    const Point2& normal = target.normals[pair.target];
-    const double residual = normal.dot(moved[pair.source] - q);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const double residual = paired.normals[k].dot(paired.source[k] - paired.target[k]);
     error += residual * residual;
-    paired.source.push_back(moved[pair.source]);
-    paired.target.push_back(q);
-    paired.normals.push_back(normal);
   }
-  if (paired.source.size() < 3) return std::nullopt;
   const auto step = solve_point_to_plane(paired.target, paired.normals, paired.source);
   if (!step) return std::nullopt;
-  return MinimizerStep{*step, error / static_cast<double>(paired.source.size())};
+  return MinimizerStep{*step, error / static_cast<double>(pairs.size())};
 }
 
 }  // namespace
 
-std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target,
-                                           const std::vector<Point2>& moved, const std::vector<PointPair>& pairs,
+std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target, const PointCloud2& source,
+                                           const SE2& T_target_source, const std::vector<PointPair>& pairs,
                                            PairedPoints& paired) {
-  return minimizer == Minimizer::kPointToPoint ? point_to_point_step(target, moved, pairs, paired)
-                                               : point_to_line_step(target, moved, pairs, paired);
+  return minimizer == Minimizer::kPointToPoint ? point_to_point_step(target, source, T_target_source, pairs, paired)
+                                               : point_to_line_step(target, source, T_target_source, pairs, paired);
 }
 
 }  // namespace slam2d

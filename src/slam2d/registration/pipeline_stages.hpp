@@ -56,10 +56,11 @@ class TargetIndex {
   TargetIndex(const TargetIndex&) = delete;
   TargetIndex& operator=(const TargetIndex&) = delete;
 
-  /// Pairs each moved source point (moved[i] = T p_i, in the target frame) with its closest
-  /// target point by the configured search, when within max_distance; overwrites `pairs`
-  /// (no allocation once it has grown).
-  void associate(const std::vector<Point2>& moved, std::vector<PointPair>& pairs) const;
+  /// Pairs each source point, moved by T_target_source, with its closest target point by the
+  /// configured search, when within max_distance; overwrites `pairs` (no allocation once it has
+  /// grown). The kd-tree search is associate_closest (nearest_association.hpp), the matchers' own.
+  void associate(const std::vector<Point2>& source_points, const SE2& T_target_source,
+                 std::vector<PointPair>& pairs) const;
 
   /// The kd-tree over the target points (nullptr for the projective search).
   const KdTree2* tree() const { return tree_.get(); }
@@ -83,20 +84,21 @@ struct MinimizerStep {
   double mean_squared_error;  // m^2, of the pairs at the current T under the metric, before the step
 };
 
-/// The paired points handed to the closed-form solvers (closed_form.hpp); reused across
-/// iterations, so no allocation once grown.
+/// The paired points handed to the closed-form solvers (closed_form.hpp), gathered by
+/// gather_pairs (nearest_association.hpp); reused across iterations, so no allocation once grown.
 struct PairedPoints {
   std::vector<Point2> target;
-  std::vector<Point2> source;  // moved by the current estimate
+  std::vector<Point2> source;   // moved by the current estimate
   std::vector<Point2> normals;  // the target's (point-to-line)
 };
 
-/// One minimisation of the metric over the pairs at the current estimate (moved[i] = T p_i).
-/// Point-to-line skips pairs whose target point has no normal. nullopt when the pairs do not
+/// One minimisation of the metric over the pairs at the current estimate T_target_source (the
+/// source points are moved by it). Point-to-line needs a normal at every pair's target point
+/// (the pipeline drops the others first, keep_pairs_with_normals). nullopt when the pairs do not
 /// determine the step (fewer than 2 pairs for point-to-point, fewer than 3 or no constraint at
 /// all for point-to-line; an unconstrained direction of point-to-line gets no motion).
-std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target,
-                                           const std::vector<Point2>& moved, const std::vector<PointPair>& pairs,
+std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target, const PointCloud2& source,
+                                           const SE2& T_target_source, const std::vector<PointPair>& pairs,
                                            PairedPoints& paired);
 
 }  // namespace slam2d
