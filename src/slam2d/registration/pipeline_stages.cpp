@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/closed_form.hpp"
 #include "slam2d/registration/kd_tree.hpp"
 #include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
+#include "slam2d/registration/pl_icp_search.hpp"
 
 namespace slam2d {
 
@@ -16,54 +16,16 @@ ErrorMetric error_metric(Minimizer minimizer) {
   return minimizer == Minimizer::kPointToPoint ? ErrorMetric::kPointToPoint : ErrorMetric::kPointToLine;
 }
 
-double pseudo_bearing(const Point2& p) {
-  const double x = p.x();
-  const double y = p.y();
-  const double sum = std::abs(x) + std::abs(y);
-  if (!(sum > 0.0)) return 0.0;
-  if (y >= 0.0) return x >= 0.0 ? y / sum : 1.0 - x / sum;  // [0, 1) first quadrant, [1, 2) second
-  return x < 0.0 ? 2.0 - y / sum : 3.0 + x / sum;           // [2, 3) third, [3, 4) fourth
-}
-
-TargetIndex::TargetIndex(const PointCloud2& target, const AssociationConfig& config)
-    : target_(&target), config_(config) {
+TargetIndex::TargetIndex(const PointCloud2& target, const AssociationConfig& config) : config_(config) {
   if (config.kind == AssociationKind::kKdTree) {
     tree_ = std::make_unique<KdTree2>(target.points);
-    return;
+  } else {
+    scan_ = std::make_unique<pl_icp_detail::TargetIndex>();  // in place: its kd-tree fallback indexes its points
+    pl_icp_detail::prepare_target(target, PlIcpSearch::kProjective, *scan_);
   }
-  order_.resize(target.size());
-  std::iota(order_.begin(), order_.end(), std::size_t{0});
-  std::vector<double> bearing(target.size());
-  for (std::size_t j = 0; j < target.size(); ++j) bearing[j] = pseudo_bearing(target.points[j]);
-  std::stable_sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return bearing[a] < bearing[b]; });
-  bearings_.resize(target.size());
-  for (std::size_t k = 0; k < order_.size(); ++k) bearings_[k] = bearing[order_[k]];
 }
 
 TargetIndex::~TargetIndex() = default;
-
-// Censi 2008, Sec. IV-B: the source point's bearing in the target scan names a place in the
-// target's bearing order; the closest target point within +-window places of it wins. The
-// order is circular (modulo n), so a 360 degree scan has no seam.
-std::size_t TargetIndex::closest_projective(const Point2& query, double& squared_distance) const {
-  const std::size_t n = bearings_.size();
-  const auto place = static_cast<std::ptrdiff_t>(
-      std::lower_bound(bearings_.begin(), bearings_.end(), pseudo_bearing(query)) - bearings_.begin());
-  const auto window = static_cast<std::ptrdiff_t>(config_.window);
-  const auto count = static_cast<std::ptrdiff_t>(n);
-  std::size_t best = n;
-  squared_distance = std::numeric_limits<double>::infinity();
-  // The bearing lies between places `place - 1` and `place`: window more on either side.
-  for (std::ptrdiff_t offset = -window - 1; offset <= window; ++offset) {
-    const std::size_t j = order_[static_cast<std::size_t>(((place + offset) % count + count) % count)];
-    const double d2 = (target_->points[j] - query).squaredNorm();
-    if (d2 < squared_distance) {
-      squared_distance = d2;
-      best = j;
-    }
-  }
-  return best;
-}
 
 void TargetIndex::associate(const std::vector<Point2>& source_points, const SE2& T_target_source,
                             std::vector<PointPair>& pairs) const {
@@ -71,15 +33,19 @@ void TargetIndex::associate(const std::vector<Point2>& source_points, const SE2&
     associate_closest(*tree_, source_points, T_target_source, config_.max_distance, pairs);  // the matchers' own
     return;
   }
+  // Censi 2008, Sec. IV-B, PL-ICP's search (pl_icp_search.hpp): exact, closest strictly within
+  // max_distance; each walk starts at the point's previous match or its neighbour's.
   pairs.clear();
-  if (target_->empty()) return;
+  tracked_.resize(source_points.size());
   const Eigen::Matrix2d R = T_target_source.rotation();
   const Point2& t = T_target_source.translation();
-  const double max2 = config_.max_distance * config_.max_distance;
+  int previous = pl_icp_detail::kNone;
   for (std::size_t i = 0; i < source_points.size(); ++i) {
-    double d2 = 0.0;
-    const std::size_t j = closest_projective(R * source_points[i] + t, d2);
-    if (d2 <= max2) pairs.push_back({i, j, d2});
+    const Point2 moved = R * source_points[i] + t;
+    const int j = pl_icp_detail::track_nearest(*scan_, moved, config_.max_distance, tracked_[i], previous);
+    if (j == pl_icp_detail::kNone) continue;
+    previous = j;
+    pairs.push_back({i, scan_->original[static_cast<std::size_t>(j)], (scan_->points[j] - moved).squaredNorm()});
   }
 }
 
