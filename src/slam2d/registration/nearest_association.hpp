@@ -33,6 +33,13 @@ void associate_closest(const KdTree2& tree, const std::vector<Point2>& source_po
 /// Keeps the pairs whose target point has a normal (has_normal), in order.
 void keep_pairs_with_normals(const PointCloud2& target, std::vector<PointPair>& pairs);
 
+/// Least trimmed squares (D. Chetverikov et al., "The trimmed iterative closest point algorithm",
+/// ICPR 2002, Sec. 3, step 2): keeps the `kept` pairs with the smallest squared distances, in
+/// their order; ties at the cut are kept first come first (the whole list when kept >= its
+/// size). `scratch` is the caller's buffer (no allocation once it has grown). Trimmed ICP and
+/// the pipeline's trimmed filter.
+void keep_closest_pairs(std::vector<PointPair>& pairs, std::size_t kept, std::vector<double>& scratch);
+
 /// The paired points into the caller's buffers: target_points[i] = target[pairs[i].target] and
 /// source_points[i] = T_target_source * source[pairs[i].source]; target_normals too when given.
 void gather_pairs(const std::vector<PointPair>& pairs, const PointCloud2& target, const PointCloud2& source,
