@@ -24,10 +24,38 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/registration/icp.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
 namespace {
+
+// The shared trimming (trimmed ICP and the pipeline's trimmed filter) against a stable sort: the
+// `kept` smallest squared distances, in their order, ties at the cut first come first kept.
+TEST(KeepClosestPairs, AgreesWithAStableSort) {
+  Rng rng(17);
+  std::vector<double> scratch;
+  for (int trial = 0; trial < 200; ++trial) {
+    const auto n = static_cast<std::size_t>(1 + trial % 37);
+    std::vector<PointPair> pairs;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double d2 = trial % 3 == 0 ? std::floor(rng.uniform(0.0, 4.0)) : rng.uniform(0.0, 1.0);  // ties
+      pairs.push_back({i, n - i, d2});
+    }
+    const std::size_t kept = static_cast<std::size_t>(trial) % (n + 2);  // 0 .. n + 1
+    std::vector<PointPair> sorted = pairs;
+    std::stable_sort(sorted.begin(), sorted.end(),
+                     [](const PointPair& a, const PointPair& b) { return a.squared_distance < b.squared_distance; });
+    sorted.resize(std::min(kept, n));
+    std::sort(sorted.begin(), sorted.end(), [](const PointPair& a, const PointPair& b) { return a.source < b.source; });
+    keep_closest_pairs(pairs, kept, scratch);
+    ASSERT_EQ(pairs.size(), sorted.size()) << "trial " << trial;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      EXPECT_EQ(pairs[k].source, sorted[k].source) << "trial " << trial;
+      EXPECT_EQ(pairs[k].squared_distance, sorted[k].squared_distance);
+    }
+  }
+}
 
 using slam2d::test::poses_near;
 

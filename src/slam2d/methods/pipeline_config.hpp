@@ -18,7 +18,7 @@
 //   normals: neighbors, max_neighbor_distance, min_neighbors, ordered
 //   max_distance: distance            trimmed: ratio
 //   median_factor: factor, quantile   normal_angle: max_angle
-// association: kind (kdtree | projective), max_distance, window; minimizer: point_to_point |
+// association: kind (kdtree | projective), max_distance; minimizer: point_to_point |
 // point_to_line | point_to_plane (the same as point_to_line); convergence: max_iterations,
 // translation, rotation, error_change. These are the structs' field tables (core/config_fields.hpp),
 // read by io's read_config. A misspelt key, a key of another kind, a wrong type or an

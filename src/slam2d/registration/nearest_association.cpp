@@ -2,6 +2,7 @@
 
 #include "slam2d/registration/nearest_association.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "slam2d/core/angles.hpp"
@@ -30,6 +31,30 @@ void keep_pairs_with_normals(const PointCloud2& target, std::vector<PointPair>& 
     if (has_normal(target, pair.target)) pairs[kept++] = pair;
   }
   pairs.resize(kept);
+}
+
+void keep_closest_pairs(std::vector<PointPair>& pairs, std::size_t kept, std::vector<double>& scratch) {
+  const std::size_t n = pairs.size();
+  if (kept >= n) return;
+  if (kept == 0) {
+    pairs.clear();
+    return;
+  }
+  scratch.resize(n);
+  for (std::size_t i = 0; i < n; ++i) scratch[i] = pairs[i].squared_distance;
+  std::nth_element(scratch.begin(), scratch.begin() + static_cast<std::ptrdiff_t>(kept - 1), scratch.end());
+  const double cut = scratch[kept - 1];
+  std::size_t below = 0;
+  for (const PointPair& pair : pairs) below += pair.squared_distance < cut ? 1 : 0;
+  std::size_t ties = kept - below;  // pairs exactly at the cut that still fit, first come first kept
+  std::erase_if(pairs, [&](const PointPair& pair) {
+    if (pair.squared_distance < cut) return false;
+    if (pair.squared_distance == cut && ties > 0) {
+      --ties;
+      return false;
+    }
+    return true;
+  });
 }
 
 void gather_pairs(const std::vector<PointPair>& pairs, const PointCloud2& target, const PointCloud2& source,
@@ -64,7 +89,7 @@ PointCloud2 with_normals(const PointCloud2& target, const KdTree2& tree, const N
 
 void finish_match(const PointCloud2& target, const PointCloud2& source,
                   const std::vector<Correspondence>& correspondences, ErrorMetric metric,
-                  std::size_t min_correspondences, MatchResult& result) {
+                  std::size_t min_correspondences, MatchResult& result, const SensorNoise& noise) {
   result.inliers = correspondences.size();
   result.residual = correspondences.empty()
                         ? 0.0
@@ -74,7 +99,7 @@ void finish_match(const PointCloud2& target, const PointCloud2& source,
     result.degenerate = true;
     return;
   }
-  result.covariance = censi_covariance(target, source, result.T_target_source, correspondences, metric);
+  result.covariance = censi_covariance(target, source, result.T_target_source, correspondences, metric, noise);
   apply(analyze_degeneracy(target, source, result.T_target_source, correspondences), result);
 }
 

@@ -1,5 +1,6 @@
 #pragma once
-// The steps the closest-point matchers share (icp.cpp, trimmed_icp.cpp, point_to_plane.cpp):
+// The steps the closest-point matchers share (icp.cpp, trimmed_icp.cpp, point_to_plane.cpp, and
+// the stages of the modular pipeline, pipeline_stages.cpp and pipeline.cpp):
 // closest-point association by kd-tree with distance rejection (Besl & McKay 1992, Sec. III-A:
 // y = C(p, X), the closest model point), gathering the pairs for a closed-form solver
 // (closed_form.hpp), and filling a MatchResult from the final correspondences.
@@ -32,6 +33,13 @@ void associate_closest(const KdTree2& tree, const std::vector<Point2>& source_po
 /// Keeps the pairs whose target point has a normal (has_normal), in order.
 void keep_pairs_with_normals(const PointCloud2& target, std::vector<PointPair>& pairs);
 
+/// Least trimmed squares (D. Chetverikov et al., "The trimmed iterative closest point algorithm",
+/// ICPR 2002, Sec. 3, step 2): keeps the `kept` pairs with the smallest squared distances, in
+/// their order; ties at the cut are kept first come first (the whole list when kept >= its
+/// size). `scratch` is the caller's buffer (no allocation once it has grown). Trimmed ICP and
+/// the pipeline's trimmed filter.
+void keep_closest_pairs(std::vector<PointPair>& pairs, std::size_t kept, std::vector<double>& scratch);
+
 /// The paired points into the caller's buffers: target_points[i] = target[pairs[i].target] and
 /// source_points[i] = T_target_source * source[pairs[i].source]; target_normals too when given.
 void gather_pairs(const std::vector<PointPair>& pairs, const PointCloud2& target, const PointCloud2& source,
@@ -51,7 +59,7 @@ PointCloud2 with_normals(const PointCloud2& target, const KdTree2& tree, const N
 /// covariance stays huge and the match is flagged degenerate. `target` must carry normals.
 void finish_match(const PointCloud2& target, const PointCloud2& source,
                   const std::vector<Correspondence>& correspondences, ErrorMetric metric,
-                  std::size_t min_correspondences, MatchResult& result);
+                  std::size_t min_correspondences, MatchResult& result, const SensorNoise& noise = {});
 
 /// The result of a match that could not start (too few points) or failed after `iterations`:
 /// the guess, not converged, huge covariance, degenerate.

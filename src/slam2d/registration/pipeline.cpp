@@ -8,8 +8,8 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/covariance.hpp"
-#include "slam2d/registration/degeneracy.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
@@ -78,12 +78,11 @@ struct Prepared {
 
 // The buffers of the iterations, sized once per match.
 struct Workspace {
-  std::vector<Point2> moved;  // source points in the target frame at the current estimate
   std::vector<PointPair> pairs;
   std::vector<double> scratch;
   PairedPoints paired;
 
-  explicit Workspace(std::size_t source_size) : moved(source_size) {
+  explicit Workspace(std::size_t source_size) {
     pairs.reserve(source_size);
     scratch.reserve(source_size);
     paired.target.reserve(source_size);
@@ -94,20 +93,14 @@ struct Workspace {
 
 // Steps 2-3: move the source by T, associate, drop pairs point-to-line cannot use, filter.
 void match_pairs(const Prepared& prepared, const SE2& T, const PipelineConfig& config, Workspace& work) {
-  const Eigen::Matrix2d R = T.rotation();
-  const Eigen::Vector2d& t = T.translation();
-  for (std::size_t i = 0; i < prepared.source.size(); ++i) work.moved[i] = R * prepared.source.points[i] + t;
-  prepared.index->associate(work.moved, work.pairs);
-  if (config.minimizer == Minimizer::kPointToLine) {
-    std::erase_if(work.pairs, [&](const PointPair& pair) { return !has_normal(prepared.target, pair.target); });
-  }
+  prepared.index->associate(prepared.source.points, T, work.pairs);
+  if (config.minimizer == Minimizer::kPointToLine) keep_pairs_with_normals(prepared.target, work.pairs);
   apply_outlier_filters(config.outlier_filters, {prepared.target, prepared.source, T}, work.pairs, work.scratch);
 }
 
 // Step 5: a small step, or a small relative change of the mean squared error.
 bool has_converged(const MinimizerStep& step, double previous_error, const ConvergenceConfig& config) {
-  const bool small_step = step.step.translation().norm() < config.translation &&
-                          std::abs(step.step.theta()) < config.rotation;
+  const bool small_step = step_below(SE2(), step.step, config.translation, config.rotation);
   const bool small_change = config.error_change > 0.0 && std::isfinite(previous_error) &&
                             std::abs(previous_error - step.mean_squared_error) <= config.error_change * previous_error;
   return small_step || small_change;
@@ -115,13 +108,9 @@ bool has_converged(const MinimizerStep& step, double previous_error, const Conve
 
 // A match that could not be made: the guess, flagged, with a huge covariance.
 MatchResult failed(const SE2& guess, int iterations, std::size_t pairs) {
-  MatchResult result;
-  result.T_target_source = guess;
-  result.converged = false;
-  result.iterations = iterations;
+  MatchResult result = unmatched(guess, iterations);
   result.inliers = pairs;
   result.residual = std::numeric_limits<double>::quiet_NaN();
-  result.degenerate = true;
   return result;
 }
 
@@ -133,20 +122,13 @@ MatchResult summarize(Prepared& prepared, const SE2& T, const SE2& guess, bool c
   if (work.pairs.size() < static_cast<std::size_t>(config.min_inliers)) {
     return failed(guess, iterations, work.pairs.size());
   }
-  std::vector<Correspondence> correspondences;
-  correspondences.reserve(work.pairs.size());
-  for (const PointPair& pair : work.pairs) correspondences.push_back({.source = pair.source, .target = pair.target});
-  const ErrorMetric metric = error_metric(config.minimizer);
   MatchResult result;
   result.T_target_source = T;
   result.converged = converged;
   result.iterations = iterations;
-  result.inliers = correspondences.size();
-  result.covariance = censi_covariance(prepared.target, prepared.source, T, correspondences, metric,
-                                       {.range_sigma = config.range_sigma});
-  result.residual = rms_residual(prepared.target, prepared.source, T, correspondences, metric);
-  ensure_normals(prepared.target, config, prepared.index->tree());
-  apply(analyze_degeneracy(prepared.target, prepared.source, T, correspondences), result);
+  ensure_normals(prepared.target, config, prepared.index->tree());  // for the degeneracy analysis
+  finish_match(prepared.target, prepared.source, to_correspondences(work.pairs), error_metric(config.minimizer),
+               work.pairs.size(), result, {.range_sigma = config.range_sigma});
   return result;
 }
 
@@ -182,7 +164,7 @@ MatchResult match_pipeline(const PointCloud2& target, const PointCloud2& source,
   while (iterations < config.convergence.max_iterations && !converged) {
     match_pairs(prepared, T, config, work);  // Steps 2-3
     if (work.pairs.size() < min_inliers) return failed(T_target_source_guess, iterations, work.pairs.size());
-    const auto step = minimize_step(config.minimizer, prepared.target, work.moved, work.pairs, work.paired);  // Step 4
+    const auto step = minimize_step(config.minimizer, prepared.target, prepared.source, T, work.pairs, work.paired);  // Step 4
     if (!step) return failed(T_target_source_guess, iterations, work.pairs.size());
     T = step->step * T;
     ++iterations;

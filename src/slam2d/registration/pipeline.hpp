@@ -7,7 +7,7 @@
 //      (range clip, voxel grid, random subsample, normals; pipeline_filters.hpp);
 //   then, from the guess, until a convergence check holds or max_iterations:
 //   2. association: each source point moved by the estimate to its closest target point
-//      (kd-tree or projective; pipeline_stages.hpp);
+//      (kd-tree or PL-ICP's exact projective search; pipeline_stages.hpp);
 //   3. outlier filters, in order (max distance, trimmed, median factor, normal angle);
 //   4. error minimisation: point-to-point (closed form) or point-to-line (linear least squares),
 //      the step applied on the left, T <- step T;
@@ -21,6 +21,21 @@
 //                             .outlier_filters = {}, .minimizer = Minimizer::kPointToPoint};
 // or from YAML (pipeline_config.hpp, configs/pipeline*.yaml). No virtual calls: each stage is a
 // std::visit per filter and iteration, the per-point loops are plain functions.
+//
+// One ICP framework (issue 21): the pipeline is built from the named matchers' stages, not the
+// other way round. Its kd association, normal filter, trimming, pair gathering, step test and
+// result are those of icp / trimmed_icp / point_to_plane (nearest_association.hpp: one PointPair,
+// associate_closest, keep_pairs_with_normals, keep_closest_pairs, gather_pairs, step_below,
+// finish_match); its projective association is PL-ICP's search (pl_icp_search.hpp); its
+// minimisers are the closed-form solvers of closed_form.hpp (point-to-point SVD, Low's
+// point-to-line step, match_point_to_plane's); normals and covariance come from normals.hpp and
+// covariance.hpp. The named matchers are not presets of the pipeline, because none is exactly a
+// pipeline configuration: icp registers the original points and stops on an absolute change of
+// the error after the step (the pipeline: a step on the moved points, a relative change before
+// it) and has Besl's acceleration; point_to_plane keeps its estimate when pairs run short (the
+// pipeline returns the guess) and matches against a caller's kd-tree (graph SLAM's map, bit for
+// bit); trimmed_icp estimates the overlap, PL-ICP has Censi's exact step and rejections, and
+// IDC, GA-ICP and correlative are other algorithms. Presets would have changed their results.
 
 #include <vector>
 

@@ -131,23 +131,7 @@ void reject(const TrimmedFilter& filter, const PairContext& /*context*/, std::ve
   const std::size_t n = pairs.size();
   if (n == 0) return;
   const auto wanted = static_cast<std::size_t>(std::llround(filter.ratio * static_cast<double>(n)));
-  const std::size_t keep = std::clamp<std::size_t>(wanted, 1, n);
-  if (keep == n) return;
-  scratch.resize(n);
-  for (std::size_t i = 0; i < n; ++i) scratch[i] = pairs[i].squared_distance;
-  std::nth_element(scratch.begin(), scratch.begin() + static_cast<std::ptrdiff_t>(keep - 1), scratch.end());
-  const double cut = scratch[keep - 1];
-  std::size_t below = 0;
-  for (const PointPair& pair : pairs) below += pair.squared_distance < cut ? 1 : 0;
-  std::size_t ties = keep - below;  // pairs exactly at the cut that still fit, first come first kept
-  std::erase_if(pairs, [&](const PointPair& pair) {
-    if (pair.squared_distance < cut) return false;
-    if (pair.squared_distance == cut && ties > 0) {
-      --ties;
-      return false;
-    }
-    return true;
-  });
+  keep_closest_pairs(pairs, std::clamp<std::size_t>(wanted, 1, n), scratch);  // trimmed ICP's own
 }
 
 void reject(const MedianFactorFilter& filter, const PairContext& /*context*/, std::vector<PointPair>& pairs,

@@ -21,6 +21,7 @@
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
+#include "slam2d/registration/nearest_association.hpp"  // PointPair, the pairs of every closest-point matcher
 
 namespace slam2d {
 
@@ -106,15 +107,8 @@ void apply_data_filter(PointCloud2& cloud, const DataFilterConfig& filter);
 void apply_data_filters(PointCloud2& cloud, const std::vector<DataFilterConfig>& filters);
 
 // ---------------------------------------------------------------------------------------------
-// Outlier filters (every iteration, in order, on the pairs left by the previous one).
-
-/// One pair of the association: source point `source`, moved by the current estimate T, against
-/// target point `target`.
-struct PointPair {
-  std::size_t source = 0;
-  std::size_t target = 0;
-  double squared_distance = 0.0;  // m^2, |T p_source - q_target|^2
-};
+// Outlier filters (every iteration, in order, on the pairs left by the previous one; a PointPair
+// is source point `source`, moved by the current estimate T, against target point `target`).
 
 /// Rejects the pairs farther apart than `distance`.
 struct MaxDistanceFilter {

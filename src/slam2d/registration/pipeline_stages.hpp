@@ -2,15 +2,18 @@
 // The matching and error-minimisation stages of the modular ICP pipeline (pipeline.hpp), after
 // F. Pomerleau, F. Colas, R. Siegwart, S. Magnenat, "Comparing ICP variants on real-world data
 // sets", Autonomous Robots 34(3), 2013, Sec. 3, and their 2015 review, Sec. 4.2 and 4.4:
-// - association: the closest target point by kd-tree, or the projective search of ordered scans
-//   (the target points sorted by bearing; the closest among +-window places around the source
-//   point's bearing, as in A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008,
-//   Sec. IV-B);
+// - association: the closest target point by kd-tree (associate_closest, nearest_association.hpp,
+//   as icp, trimmed_icp and point_to_plane), or by the projective search of ordered scans of
+//   A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008, Sec. IV-B: PL-ICP's own
+//   exact search with its jump tables and clearance certificates (pl_icp_search.hpp), which
+//   finds the same closest point as the kd-tree, faster on scans in beam order;
 // - minimisation: point-to-point in closed form (P. Besl, N. McKay, "A method for registration of
 //   3-D shapes", PAMI 14(2), 1992, Sec. III-C), or point-to-line / point-to-plane by linear least
 //   squares under the small-angle linearisation (K.-L. Low, "Linear least-squares optimization
 //   for point-to-plane ICP surface registration", TR04-004, UNC 2004, Sec. 2); both by the
-//   shared solvers of closed_form.hpp.
+//   shared solvers of closed_form.hpp (the point-to-line one is match_point_to_plane's).
+// No stage is implemented twice: see pipeline.hpp for what the pipeline shares with the named
+// matchers and why they are not presets of it.
 
 #include <array>
 #include <cstddef>
@@ -27,10 +30,15 @@
 namespace slam2d {
 
 class KdTree2;
+namespace pl_icp_detail {
+struct TargetIndex;
+struct TrackedNearest;
+}  // namespace pl_icp_detail
 
 enum class AssociationKind {
   kKdTree,      // the closest target point (any cloud)
-  kProjective,  // the closest within +-window places in bearing order (clouds in their sensor frames)
+  kProjective,  // the same closest point by PL-ICP's projective search (clouds in their sensor
+                //   frames, in beam order; any other target falls back to a kd-tree)
 };
 constexpr auto choices(AssociationKind) {
   return std::array{Choice{"kdtree", AssociationKind::kKdTree}, Choice{"projective", AssociationKind::kProjective}};
@@ -39,16 +47,14 @@ constexpr auto choices(AssociationKind) {
 struct AssociationConfig {
   AssociationKind kind = AssociationKind::kKdTree;
   double max_distance = 1.0;
-  int window = 5;
 
   bool operator==(const AssociationConfig&) const = default;
 };
 
 template <typename Fields>
 void describe(Fields& f, AssociationConfig& c) {
-  f.choice("kind", c.kind, "the closest target point (kd-tree, any cloud) or the closest within +-window places in bearing order");
+  f.choice("kind", c.kind, "the closest target point by kd-tree (any cloud) or by PL-ICP's projective search (clouds in beam order; the same point)");
   f.number("max_distance", c.max_distance, "m", greater_than(0), "no pair is formed with a closest point farther than this");
-  f.number("window", c.window, "places", at_least(0), "on either side of the bearing (projective only)");
 }
 
 enum class Minimizer {
@@ -71,47 +77,44 @@ class TargetIndex {
   TargetIndex(const TargetIndex&) = delete;
   TargetIndex& operator=(const TargetIndex&) = delete;
 
-  /// Pairs each moved source point (moved[i] = T p_i, in the target frame) with its closest
-  /// target point by the configured search, when within max_distance; overwrites `pairs`
-  /// (no allocation once it has grown).
-  void associate(const std::vector<Point2>& moved, std::vector<PointPair>& pairs) const;
+  /// Pairs each source point, moved by T_target_source, with its closest target point by the
+  /// configured search, when within max_distance; overwrites `pairs` (no allocation once it has
+  /// grown). The kd-tree search is associate_closest (nearest_association.hpp), the matchers' own.
+  void associate(const std::vector<Point2>& source_points, const SE2& T_target_source,
+                 std::vector<PointPair>& pairs) const;
 
   /// The kd-tree over the target points (nullptr for the projective search).
   const KdTree2* tree() const { return tree_.get(); }
 
  private:
-  std::size_t closest_projective(const Point2& query, double& squared_distance) const;
-
-  const PointCloud2* target_;
   AssociationConfig config_;
   std::unique_ptr<KdTree2> tree_;
-  std::vector<double> bearings_;     // pseudo-angles of the target points, ascending
-  std::vector<std::size_t> order_;   // the target point of each entry of bearings_
+  std::unique_ptr<pl_icp_detail::TargetIndex> scan_;  // the projective search's index
+  // Per source point, the projective search's certificate from the last association: a cache
+  // that spares most walks and never changes the answer (the search is exact).
+  mutable std::vector<pl_icp_detail::TrackedNearest> tracked_;
 };
-
-/// A monotonic stand-in for the bearing atan2(y, x) mapped to [0, 2 pi): the "diamond angle" in
-/// [0, 4), with no trigonometry. The same order as the bearing, so good for sorted searches.
-double pseudo_bearing(const Point2& p);
 
 struct MinimizerStep {
   SE2 step;                   // the update, applied on the left: T <- step * T
   double mean_squared_error;  // m^2, of the pairs at the current T under the metric, before the step
 };
 
-/// The paired points handed to the closed-form solvers (closed_form.hpp); reused across
-/// iterations, so no allocation once grown.
+/// The paired points handed to the closed-form solvers (closed_form.hpp), gathered by
+/// gather_pairs (nearest_association.hpp); reused across iterations, so no allocation once grown.
 struct PairedPoints {
   std::vector<Point2> target;
-  std::vector<Point2> source;  // moved by the current estimate
+  std::vector<Point2> source;   // moved by the current estimate
   std::vector<Point2> normals;  // the target's (point-to-line)
 };
 
-/// One minimisation of the metric over the pairs at the current estimate (moved[i] = T p_i).
-/// Point-to-line skips pairs whose target point has no normal. nullopt when the pairs do not
+/// One minimisation of the metric over the pairs at the current estimate T_target_source (the
+/// source points are moved by it). Point-to-line needs a normal at every pair's target point
+/// (the pipeline drops the others first, keep_pairs_with_normals). nullopt when the pairs do not
 /// determine the step (fewer than 2 pairs for point-to-point, fewer than 3 or no constraint at
 /// all for point-to-line; an unconstrained direction of point-to-line gets no motion).
-std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target,
-                                           const std::vector<Point2>& moved, const std::vector<PointPair>& pairs,
+std::optional<MinimizerStep> minimize_step(Minimizer minimizer, const PointCloud2& target, const PointCloud2& source,
+                                           const SE2& T_target_source, const std::vector<PointPair>& pairs,
                                            PairedPoints& paired);
 
 }  // namespace slam2d

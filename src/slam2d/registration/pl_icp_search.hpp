@@ -1,8 +1,9 @@
 #pragma once
 // Eq. (2) of PL-ICP (A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008): the
 // closest target point j1 of a moved source point, by the projective search over the ordered
-// target scan (CSM's "correspondence tricks") or by kd-tree. Internal to pl_icp.cpp; the header
-// exists so that pl_icp_test can check the search against brute force.
+// target scan (CSM's "correspondence tricks") or by kd-tree. Internal to the registration module:
+// pl_icp.cpp, and the projective association of the modular pipeline (pipeline_stages.cpp) --
+// the one projective point search of the library; pl_icp_test checks it against brute force.
 //
 // The projective search walks the ordered target up and down from the previous iteration's
 // match (or from the query's bearing), skipping runs of points with the jump tables (the next
@@ -53,6 +54,8 @@ struct TargetIndex {
 
 /// The usable target points (range >= kMinRange, finite) and the index `search` asks for; an
 /// unordered target gets the kd-tree whatever `search` says.
+/// Do not move the result once it holds a kd-tree: the tree indexes the `points` member in
+/// place (build a long-lived index with the overload below, into an object that stays put).
 TargetIndex prepare_target(const PointCloud2& target, PlIcpSearch search);
 /// The same into `t`, reusing its buffers (no allocation once they are large enough).
 void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& t);

@@ -52,6 +52,7 @@ constexpr int kMaxOverlapUpdates = 8;
 struct TrimmedBuffers {
   std::vector<PointPair> pairs;
   std::vector<double> sorted_distances;
+  std::vector<double> scratch;  // keep_closest_pairs
   std::vector<double> psi_factors;
   std::vector<Point2> target_points;
   std::vector<Point2> source_points;
@@ -83,13 +84,11 @@ std::size_t pair_count(TrimmedBuffers& buffers, const TrimmedIcpConfig& config, 
   return std::clamp(kept, std::min(count, static_cast<std::size_t>(config.min_correspondences)), count);
 }
 
-// Step 2: the `kept` pairs with the smallest squared distances, by nth_element; returns the
+// Step 2: the `kept` pairs with the smallest squared distances (keep_closest_pairs); returns the
 // trimmed MSE e = S'_LTS / N_po.
-double keep_best_pairs(std::vector<PointPair>& pairs, std::size_t kept) {
+double keep_best_pairs(std::vector<PointPair>& pairs, std::size_t kept, std::vector<double>& scratch) {
   if (kept == 0) return kInfinity;
-  std::nth_element(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(kept - 1), pairs.end(),
-                   [](const PointPair& a, const PointPair& b) { return a.squared_distance < b.squared_distance; });
-  pairs.resize(kept);
+  keep_closest_pairs(pairs, kept, scratch);
   double sum = 0.0;
   for (const PointPair& pair : pairs) sum += pair.squared_distance;
   return sum / static_cast<double>(kept);
@@ -131,7 +130,7 @@ MatchResult match_trimmed_icp(const PointCloud2& target, const PointCloud2& sour
     associate_closest(tree, source.points, T, kInfinity, buffers.pairs);  // Step 1: closest points, d_i^2
     if (config.overlap == 0.0) collect_distances(buffers);
     const std::size_t kept = pair_count(buffers, config, overlap_count);
-    const double mse = keep_best_pairs(buffers.pairs, kept);  // Step 2: N_po least d_i^2, e
+    const double mse = keep_best_pairs(buffers.pairs, kept, buffers.scratch);  // Step 2: N_po least d_i^2, e
     if (kept < min_pairs) break;
     if (trimmed_mse_settled(mse, previous_mse, config)) {  // Step 3
       if (!estimate_at_convergence || overlap_updates == kMaxOverlapUpdates) {
