@@ -92,5 +92,16 @@ TEST(ConfigNode, LoadsFilesAndReportsMissingOnes) {
   EXPECT_THROW(ConfigNode::load(dir.file("missing.yaml")), Error);
 }
 
+TEST(ConfigFile, UnsignedIntegersReadTheirWholeRange) {
+  const ConfigNode node = ConfigNode::parse("big: 18446744073709551615\nsmall: 7\nnegative: -1\nover: 18446744073709551616\n");
+  std::uint64_t value = 0;
+  ASSERT_TRUE(node.read("big", value));
+  EXPECT_EQ(value, 18446744073709551615ULL);
+  ASSERT_TRUE(node.read("small", value));
+  EXPECT_EQ(value, 7u);
+  EXPECT_THROW(node.read("negative", value), ParseError);
+  EXPECT_THROW(node.read("over", value), ParseError);
+}
+
 }  // namespace
 }  // namespace slam2d

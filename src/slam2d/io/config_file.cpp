@@ -1,5 +1,6 @@
 #include "slam2d/io/config_file.hpp"
 
+#include <charconv>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -112,6 +113,12 @@ long long ConfigNode::as_integer() const {
   return value;
 }
 
+long long ConfigNode::as_integer_or(long long fallback) const {
+  if (!is_scalar()) throw error("expected an integer");
+  long long value = 0;
+  return YAML::convert<long long>::decode(impl_->node, value) ? value : fallback;
+}
+
 bool ConfigNode::as_bool() const {
   bool value = false;
   if (!is_scalar() || !YAML::convert<bool>::decode(impl_->node, value)) {
@@ -143,9 +150,16 @@ bool ConfigNode::read(const std::string& key, int& value) const {
 bool ConfigNode::read(const std::string& key, std::uint64_t& value) const {
   if (!has(key)) return false;
   const ConfigNode node = at(key);
-  const long long v = node.as_integer();
-  if (v < 0) throw node.error("expected a non-negative integer for '" + key + "'");
-  value = static_cast<std::uint64_t>(v);
+  const long long v = node.as_integer_or(-1);  // the whole unsigned range does not fit a long long
+  if (v >= 0) {
+    value = static_cast<std::uint64_t>(v);
+    return true;
+  }
+  const std::string text = node.as_string();
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) {
+    throw node.error("expected a non-negative integer for '" + key + "', got '" + text + "'");
+  }
   return true;
 }
 

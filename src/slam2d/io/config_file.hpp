@@ -61,6 +61,7 @@ class ConfigNode {
   /// Scalar conversions (ParseError on a wrong type or a non-finite number).
   double as_double() const;
   long long as_integer() const;
+  long long as_integer_or(long long fallback) const;  // fallback when the scalar is not a long long
   bool as_bool() const;
   std::string as_string() const;
 
