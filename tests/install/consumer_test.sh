@@ -13,6 +13,15 @@ trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
 test -f "$work/prefix/include/slam2d/methods/matcher_registry.hpp"
 test -f "$work/prefix/lib/cmake/slam2d/slam2dConfig.cmake" || test -f "$work/prefix/lib/x86_64-linux-gnu/cmake/slam2d/slam2dConfig.cmake"
+# Public headers only: the internals under detail/ stay in the source tree, and every installed
+# header compiles from the installed tree alone (one translation unit including them all).
+if find "$work/prefix/include/slam2d" -type d -name detail | grep -q .; then
+  echo "consumer_test: a detail/ folder was installed" >&2
+  exit 1
+fi
+(cd "$work/prefix/include" && find slam2d -name '*.hpp' | sort | sed 's/.*/#include "&"/') > "$work/all_headers.cpp"
+headers=$(grep -c include "$work/all_headers.cpp")
+c++ -std=c++20 -fsyntax-only -I"$work/prefix/include" -I/usr/include/eigen3 "$work/all_headers.cpp"
 cmake -S "$source/examples/consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >/dev/null
 # The consumer must read the installed headers, never the source tree's.
@@ -33,4 +42,4 @@ if [[ "$scans" -lt 100 || "$poses" -ne "$scans" ]]; then
   echo "consumer_test: $poses poses for $scans scans" >&2
   exit 1
 fi
-echo "consumer_test: the installed package built the consumer; $poses poses for $scans scans"
+echo "consumer_test: $headers public headers compile from the installed tree; the installed package built the consumer; $poses poses for $scans scans"

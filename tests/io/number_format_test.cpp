@@ -1,5 +1,5 @@
 // Shortest exact number formatting and strict token parsing.
-#include "slam2d/io/number_format.hpp"
+#include "slam2d/io/detail/number_format.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,6 @@
 # The layering of STYLE.md, checked on the sources: no file of a module includes a header of a
-# module it may not see. Run as `cmake -DSOURCE_DIR=<repo> -P check_layering.cmake`; fails with
+# module it may not see, and no public header includes an internal one (a module's detail/, which
+# is not installed). Run as `cmake -DSOURCE_DIR=<repo> -P check_layering.cmake`; fails with
 # every offending file and include.
 #
 # What each module may include (besides itself).
@@ -30,6 +31,10 @@ foreach(module IN LISTS modules)
     file(STRINGS ${file} includes REGEX "^[ \t]*#[ \t]*include[ \t]*\"slam2d/[a-z_]+/")
     foreach(line IN LISTS includes)
       string(REGEX REPLACE "^[ \t]*#[ \t]*include[ \t]*\"slam2d/([a-z_]+)/.*" "\\1" target "${line}")
+      if(NOT file MATCHES "/detail/" AND file MATCHES "\\.hpp$" AND line MATCHES "slam2d/[a-z_]+/detail/")
+        file(RELATIVE_PATH relative ${SOURCE_DIR} ${file})
+        string(APPEND violations "  ${relative}: a public header may not include an internal one: ${line}\n")
+      endif()
       if(target STREQUAL module)
         continue()
       endif()

@@ -16,8 +16,8 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/io/carmen.hpp"
-#include "slam2d/io/number_format.hpp"
-#include "slam2d/io/text_input.hpp"
+#include "slam2d/io/detail/number_format.hpp"
+#include "slam2d/io/detail/text_input.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {

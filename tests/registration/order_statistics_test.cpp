@@ -2,7 +2,7 @@
 // against a sorted copy: every pair of ranks of value sets built to stress the buckets (ties,
 // zeros, values below and above the bucketed range, all in one bucket).
 
-#include "slam2d/registration/order_statistics.hpp"
+#include "slam2d/registration/detail/order_statistics.hpp"
 
 #include <gtest/gtest.h>
 

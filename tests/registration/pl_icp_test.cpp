@@ -18,7 +18,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/kd_tree.hpp"
-#include "slam2d/registration/pl_icp_search.hpp"
+#include "slam2d/registration/detail/pl_icp_search.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "slam2d/core/error.hpp"
-#include "slam2d/eval/association.hpp"
+#include "slam2d/eval/detail/association.hpp"
 #include "slam2d/eval/statistics.hpp"
 
 namespace slam2d {

@@ -8,7 +8,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/eval/association.hpp"
+#include "slam2d/eval/detail/association.hpp"
 #include "slam2d/eval/statistics.hpp"
 
 namespace slam2d {

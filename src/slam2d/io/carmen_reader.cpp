@@ -52,8 +52,8 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/odometry_repair.hpp"
 #include "slam2d/io/carmen.hpp"
-#include "slam2d/io/number_format.hpp"
-#include "slam2d/io/text_input.hpp"
+#include "slam2d/io/detail/number_format.hpp"
+#include "slam2d/io/detail/text_input.hpp"
 
 namespace slam2d {
 

@@ -32,7 +32,7 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/atomic_file.hpp"
-#include "slam2d/io/number_format.hpp"
+#include "slam2d/io/detail/number_format.hpp"
 
 namespace slam2d {
 

@@ -71,19 +71,33 @@ struct ImrpConfig {
   double range_sigma = 0.01;
 };
 
+// The fields IMRP and IDC share, in the order of their tables.
+template <typename Fields, typename Config>
+void describe_range_rule(Fields& f, Config& c) {
+  f.number("window_initial", c.window_initial, "rad", open_interval(0, std::numbers::pi / 2), "the range rule's window B_r(0)");
+  f.number("window_final", c.window_final, "rad", greater_than(0), "the floor of B_r, <= window_initial");
+  f.number("window_decay", c.window_decay, "1/iteration", at_least(0), "alpha of the window, Eq. (6)");
+}
+template <typename Fields, typename Config>
+void describe_polylines(Fields& f, Config& c) {
+  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "range-rule pairs whose ranges differ more are dropped");
+  f.number("max_gap", c.max_gap, "m", greater_than(0), "polylines break between consecutive points farther apart");
+}
+template <typename Fields, typename Config>
+void describe_stop(Fields& f, Config& c) {
+  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
+  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
+  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs (of either rule) end the match unconverged");
+  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+}
+
 template <typename Fields>
 void describe(Fields& f, ImrpConfig& c) {
   f.number("max_iterations", c.max_iterations, "1", at_least(1), "");
-  f.number("window_initial", c.window_initial, "rad", open_interval(0, std::numbers::pi / 2), "B_r(0), the range rule's initial window");
-  f.number("window_final", c.window_final, "rad", greater_than(0), "the floor of B_r, <= window_initial");
-  f.number("window_decay", c.window_decay, "1/iteration", at_least(0), "alpha in Eq. (6)");
-  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "range-rule pairs whose ranges differ more are dropped");
-  f.number("max_gap", c.max_gap, "m", greater_than(0), "polylines break between consecutive points farther apart");
+  describe_range_rule(f, c);
+  describe_polylines(f, c);
   f.number("final_max_distance", c.final_max_distance, "m", greater_than(0), "closest-point threshold at the estimate (result statistics)");
-  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
-  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
-  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs end the match unconverged");
-  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+  describe_stop(f, c);
 }
 
 struct IdcConfig {
@@ -105,18 +119,12 @@ struct IdcConfig {
 template <typename Fields>
 void describe(Fields& f, IdcConfig& c) {
   f.number("max_iterations", c.max_iterations, "1", at_least(1), "");
-  f.number("window_initial", c.window_initial, "rad", open_interval(0, std::numbers::pi / 2), "range-rule window B_r(0)");
-  f.number("window_final", c.window_final, "rad", greater_than(0), "the floor of B_r, <= window_initial");
-  f.number("window_decay", c.window_decay, "1/iteration", at_least(0), "alpha of the window, Eq. (6)");
+  describe_range_rule(f, c);
   f.number("max_distance_initial", c.max_distance_initial, "m", greater_than(0), "closest-point threshold at t = 0");
   f.number("max_distance_final", c.max_distance_final, "m", greater_than(0), "its floor, <= max_distance_initial");
   f.number("max_distance_decay", c.max_distance_decay, "1/iteration", at_least(0), "alpha of the threshold");
-  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "range-rule pairs whose ranges differ more are dropped");
-  f.number("max_gap", c.max_gap, "m", greater_than(0), "polylines break between consecutive points farther apart");
-  f.number("translation_tolerance", c.translation_tolerance, "m", at_least(0), "converged when a step moves the source sensor less ...");
-  f.number("rotation_tolerance", c.rotation_tolerance, "rad", at_least(0), "... and turns it less");
-  f.number("min_correspondences", c.min_correspondences, "1", at_least(3), "fewer pairs (of either rule) end the match unconverged");
-  f.number("range_sigma", c.range_sigma, "m", greater_than(0), "range noise for the covariance");
+  describe_polylines(f, c);
+  describe_stop(f, c);
 }
 
 /// Throw Error naming the first invalid field.

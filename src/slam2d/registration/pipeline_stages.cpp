@@ -8,7 +8,7 @@
 #include "slam2d/registration/kd_tree.hpp"
 #include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
-#include "slam2d/registration/pl_icp_search.hpp"
+#include "slam2d/registration/detail/pl_icp_search.hpp"
 
 namespace slam2d {
 

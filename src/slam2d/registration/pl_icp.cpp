@@ -13,8 +13,8 @@
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/degeneracy.hpp"
-#include "slam2d/registration/order_statistics.hpp"
-#include "slam2d/registration/pl_icp_search.hpp"
+#include "slam2d/registration/detail/order_statistics.hpp"
+#include "slam2d/registration/detail/pl_icp_search.hpp"
 
 namespace slam2d {
 namespace {

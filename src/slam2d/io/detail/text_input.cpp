@@ -1,4 +1,4 @@
-#include "slam2d/io/text_input.hpp"
+#include "slam2d/io/detail/text_input.hpp"
 
 #include <zlib.h>
 

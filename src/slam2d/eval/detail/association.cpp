@@ -1,4 +1,4 @@
-#include "slam2d/eval/association.hpp"
+#include "slam2d/eval/detail/association.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "slam2d/registration/order_statistics.hpp"
+#include "slam2d/registration/detail/order_statistics.hpp"
 
 #include <algorithm>
 #include <bit>

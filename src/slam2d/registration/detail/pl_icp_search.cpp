@@ -1,7 +1,7 @@
 // Eq. (2) of PL-ICP (Censi 2008): the projective search with jump tables and its clearance
 // certificate (pl_icp_search.hpp), and the kd-tree fallback.
 
-#include "slam2d/registration/pl_icp_search.hpp"
+#include "slam2d/registration/detail/pl_icp_search.hpp"
 
 #include <algorithm>
 #include <cmath>
