@@ -8,6 +8,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/bilinear.hpp"
 #include "slam2d/optim/levenberg_marquardt.hpp"
+#include "slam2d/registration/degeneracy.hpp"
 
 namespace slam2d {
 
@@ -84,6 +85,22 @@ Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
   return variance * *inverse;
 }
 
+// The least constrained direction of the scan's own information (H without the prior) at the
+// estimate (registration/degeneracy.hpp, rotation scaled at the points' RMS distance).
+Eigen::Vector3d weakest_direction(const NormalEquations<3>& equations, const SE2& T_map_robot,
+                                  const std::vector<Eigen::Vector2d>& points_robot, const std::optional<PosePrior>& prior) {
+  Eigen::Matrix3d scan_information = equations.H;
+  if (prior) {
+    NormalEquations<3> prior_only;
+    add_pose_prior(prior_only, T_map_robot, *prior);
+    scan_information -= prior_only.H;
+  }
+  double squared_radius = 0.0;
+  for (const Eigen::Vector2d& p : points_robot) squared_radius += p.squaredNorm();
+  const double radius = std::sqrt(squared_radius / static_cast<double>(std::max<std::size_t>(points_robot.size(), 1)));
+  return analyze_information(scan_information, radius > 0.0 ? radius : 1.0).weak_direction;
+}
+
 // Hector's Gauss-Newton problem on one grid for the driver (optim/levenberg_marquardt.hpp):
 // Eq. (12)-(14) plus the optional pose prior, and the step shaping (solution remapping, clamps).
 struct HectorCost {
@@ -140,6 +157,7 @@ MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eige
   result.inliers = fit.equations.residuals;
   result.cost = fit.equations.cost;
   result.residual = std::sqrt(mean_squared_residual(result));
+  result.weak_direction = weakest_direction(fit.equations, SE2::from_vector(fit.x), points_robot, prior);
   return result;
 }
 
@@ -167,10 +185,10 @@ MatchResult match_with_rotation_search(const OccupancyGrid& grid, const std::vec
 }  // namespace
 
 MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
-                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
-                                        const std::optional<PosePrior>& prior) {
+                                  const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
+                                  const std::optional<PosePrior>& prior) {
   validate(config);
-  if (points_robot.empty()) {
+  if (points_robot.size() < 3) {  // fewer points than the pose has degrees of freedom
     MatchResult result;
     result.T_target_source = T_map_robot_guess;
     result.degenerate = true;

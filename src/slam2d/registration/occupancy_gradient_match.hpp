@@ -16,7 +16,9 @@
 //
 // The MatchResult: T_target_source is T_map_robot; covariance s^2 H^-1 on the finest level
 // (unknown when H is singular or there are <= 3 points); converged: the finest level's last step
-// was small; degenerate: H was singular on the finest level (the pose was not fully improved);
+// was small; degenerate: H was singular on the finest level (the pose was not fully improved; the
+// RBPF's proposal relies on this meaning); weak_direction: the least constrained direction of the
+// scan's information (registration/degeneracy.hpp), also when not degenerate;
 // iterations: Gauss-Newton steps over all levels; inliers: the end points (all are residuals);
 // residual: the RMS of r = 1 - M (1, not m; the prior's cost included); cost: sum r^2 / 2 plus the
 // prior's, on the finest level.
@@ -87,14 +89,15 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
 
 /// `iterations` Gauss-Newton steps on one grid from `T_map_robot_guess`.
 MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                     const SE2& T_map_robot_guess, int iterations,
-                                     const HectorMatcherConfig& config = {}, const std::optional<PosePrior>& prior = {});
+                               const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config = {},
+                               const std::optional<PosePrior>& prior = {});
 
 /// Coarse to fine over the pyramid's levels (coarse_iterations steps each, fine_iterations on
-/// level 0); the covariance is that of level 0. An empty point set returns the guess, degenerate.
+/// level 0); the covariance is that of level 0. Fewer than 3 points return the guess, degenerate,
+/// with an unknown covariance.
 MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
-                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config = {},
-                                        const std::optional<PosePrior>& prior = {});
+                                  const SE2& T_map_robot_guess, const HectorMatcherConfig& config = {},
+                                  const std::optional<PosePrior>& prior = {});
 
 /// Hector's fit measure: the mean of (1 - M)^2 over the end points on the finest level (the
 /// prior's cost included), 2 cost / inliers; 0 for no points.
