@@ -202,7 +202,7 @@ TEST(LikelihoodFieldMatch, RecoversAKnownOffset) {
   const MatchResult result = match_likelihood_field(map.field(), beams.points_robot, truth * SE2(0.15, -0.1, 0.05));
   EXPECT_TRUE(result.converged);
   EXPECT_TRUE(test::poses_near(result.T_target_source, truth, 0.03, 0.01)) << result.T_target_source;
-  EXPECT_GT(inlier_fraction(result, beams.points_robot.size()), 0.95);
+  EXPECT_GT(result.inlier_fraction, 0.95);
   EXPECT_LT(std::sqrt(result.covariance(0, 0)), 0.05);
   EXPECT_FALSE(result.degenerate) << "a room's corner constrains every direction";
 }

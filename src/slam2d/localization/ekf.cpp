@@ -69,7 +69,7 @@ bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) 
   scan.points.assign(points_robot.begin(), points_robot.end());
   const MatchResult coarse = match_correlative(table_, scan, pose_, search);
   const MatchResult match = match_likelihood_field(map_.field(), points_robot, coarse.T_target_source, config_.matcher);
-  if (inlier_fraction(match, points_robot.size()) < config_.min_inlier_fraction) {
+  if (match.inlier_fraction < config_.min_inlier_fraction) {
     ++stats_.rejected_match;
     return false;
   }

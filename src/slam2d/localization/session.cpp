@@ -22,7 +22,7 @@ LocalizationSession::LocalizationSession(Localizer& localizer, std::optional<Kid
 SE2 LocalizationSession::stall_motion(const LaserScan& scan) const {
   const ScanBeams beams = select_beams(scan, kStallBeams, scan.range_max);
   const MatchResult match = match_likelihood_field(map_->field(), beams.points_robot, last_.pose);
-  if (!match.converged || inlier_fraction(match, beams.points_robot.size()) < kStallMinInlierFraction) return SE2();
+  if (!match.converged || match.inlier_fraction < kStallMinInlierFraction) return SE2();
   return last_.pose.between(match.T_target_source);
 }
 

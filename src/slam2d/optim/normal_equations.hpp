@@ -60,10 +60,14 @@ enum class Damping {
 struct StepConfig {
   double lambda = 0.0;                 // 1, damping; 0 is the Gauss-Newton step
   Damping damping = Damping::kDiagonal;
+  double epsilon = 0.0;                // added to diag(H) in the damping term, kDiagonal: lambda (diag(H) + epsilon)
+  double singular_pivot = 1e-12;       // 1: an LDL^T pivot at most this times the largest diagonal entry is
+                                       // singular; 0: no singularity test, only a non-finite step fails
 };
 
 /// The step dx solving (H + lambda D) dx = -b (robust Cholesky, LDL^T), or nullopt when that
-/// system is singular, not positive definite or gives a non-finite step.
+/// system is singular, not positive definite (both tested when singular_pivot > 0) or gives a
+/// non-finite step.
 template <int N>
 std::optional<typename NormalEquations<N>::Vector> solve_step(const NormalEquations<N>& equations,
                                                                const StepConfig& config = {}) {
@@ -71,17 +75,19 @@ std::optional<typename NormalEquations<N>::Vector> solve_step(const NormalEquati
   Matrix A = equations.H;
   if (config.lambda > 0.0) {
     if (config.damping == Damping::kDiagonal) {
-      A.diagonal() += config.lambda * equations.H.diagonal();
+      A.diagonal() += config.lambda * (equations.H.diagonal().array() + config.epsilon).matrix();
     } else {
       A.diagonal().array() += config.lambda;
     }
   }
   if (!A.allFinite() || !equations.b.allFinite()) return std::nullopt;
   const Eigen::LDLT<Matrix> ldlt(A);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
-  // LDL^T reports success on a singular matrix: reject (near-)zero pivots relative to the scale of A.
-  const double scale = A.diagonal().cwiseAbs().maxCoeff();
-  if (!(scale > 0.0) || ldlt.vectorD().minCoeff() <= 1e-12 * scale) return std::nullopt;
+  if (config.singular_pivot > 0.0) {
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
+    // LDL^T reports success on a singular matrix: reject (near-)zero pivots relative to the scale of A.
+    const double scale = A.diagonal().cwiseAbs().maxCoeff();
+    if (!(scale > 0.0) || ldlt.vectorD().minCoeff() <= config.singular_pivot * scale) return std::nullopt;
+  }
   const typename NormalEquations<N>::Vector dx = ldlt.solve(-equations.b);
   if (!dx.allFinite()) return std::nullopt;
   return dx;

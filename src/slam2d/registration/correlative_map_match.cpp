@@ -28,14 +28,14 @@ Covariance3 floored(const Covariance3& covariance, const MapMatchConfig& config)
   return make_positive_definite(result, 1e-3 * std::min(floor_xy, floor_theta));
 }
 
-// The fraction of the scan's points within `distance` of a map point at the pose.
-double inlier_fraction(const KdTree2& map, const PointCloud2& scan, const SE2& T_map_robot, double distance) {
+// The scan's points within `distance` of a map point at the pose.
+std::size_t count_inliers(const KdTree2& map, const PointCloud2& scan, const SE2& T_map_robot, double distance) {
   std::size_t inliers = 0;
   for (const Point2& point : scan.points) {
     const Neighbor nearest = map.nearest(T_map_robot * point);
     if (nearest.index < map.size() && nearest.squared_distance <= distance * distance) ++inliers;
   }
-  return static_cast<double>(inliers) / static_cast<double>(scan.size());
+  return inliers;
 }
 
 }  // namespace
@@ -49,27 +49,33 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config) {
   return map;
 }
 
-MapMatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+MatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
                                   const MapMatchConfig& config) {
-  MapMatchResult result;
-  result.T_map_robot = T_map_robot_guess;
+  MatchResult result;
+  result.T_target_source = T_map_robot_guess;
   if (map.cloud.size() < 3 || scan.size() < 3) return result;
   const MatchResult coarse = match_correlative(map.grid, scan, T_map_robot_guess, config.correlative);
+  result.iterations = coarse.iterations;
   result.score = static_cast<double>(coarse.inliers) / static_cast<double>(scan.size());
   if (!coarse.converged && result.score < config.min_score_at_window_edge) return result;
   result.converged = true;
-  result.T_map_robot = coarse.T_target_source;
+  result.T_target_source = coarse.T_target_source;
   result.covariance = floored(coarse.covariance, config);
   result.degenerate = coarse.degenerate;
-  if (!config.refine) return result;
-  const MatchResult fine = match_point_to_plane(map.grid.tree(), map.cloud, scan, coarse.T_target_source, config.refinement);
-  const SE2 shift = coarse.T_target_source.between(fine.T_target_source);
-  if (fine.converged && shift.translation().norm() <= config.max_refinement_shift &&
-      std::abs(shift.theta()) <= config.correlative.window_theta) {
-    result.T_map_robot = fine.T_target_source;
-    result.refined = true;
+  result.weak_direction = coarse.weak_direction;
+  if (config.refine) {
+    const MatchResult fine =
+        match_point_to_plane(map.grid.tree(), map.cloud, scan, coarse.T_target_source, config.refinement);
+    const SE2 shift = coarse.T_target_source.between(fine.T_target_source);
+    result.converged = fine.converged && shift.translation().norm() <= config.max_refinement_shift &&
+                       std::abs(shift.theta()) <= config.correlative.window_theta;
+    if (result.converged) {
+      result.T_target_source = fine.T_target_source;
+      result.residual = fine.residual;
+    }
   }
-  result.inlier_fraction = inlier_fraction(map.grid.tree(), scan, result.T_map_robot, config.inlier_distance);
+  result.inliers = count_inliers(map.grid.tree(), scan, result.T_target_source, config.inlier_distance);
+  result.inlier_fraction = static_cast<double>(result.inliers) / static_cast<double>(scan.size());
   return result;
 }
 

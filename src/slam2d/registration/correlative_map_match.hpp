@@ -8,6 +8,14 @@
 // point_to_plane.hpp). The covariance is Olson's, from the response over the window (Eq. (3)),
 // floored so that no constraint claims more than the sensor can give.
 //
+// The MatchResult: T_target_source is T_map_robot (the guess when the search found nothing);
+// covariance Olson's, floored (unknown when the search found nothing); converged: the search found
+// an inner maximum above min_score (or one on the window's edge with min_score_at_window_edge) and,
+// with refine, the refinement converged within max_refinement_shift (when only the refinement
+// fails: converged = false with the search's pose and covariance); score: the search's share of
+// the scan on the table's occupied cells; inliers / inlier_fraction: scan points within
+// inlier_distance of a map point at the estimate; degenerate / weak_direction: the search's.
+//
 // Loop closure matches a keyframe against a chain of old keyframes over a large window
 // (slam/graph/loop_closure.hpp).
 
@@ -19,6 +27,7 @@
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/registration/correlative.hpp"
+#include "slam2d/registration/match_result.hpp"
 #include "slam2d/registration/point_to_plane.hpp"
 
 namespace slam2d {
@@ -53,16 +62,6 @@ void describe(Fields& f, MapMatchConfig& c) {
            "a best pose on the window's edge (a corridor's axis) is kept when this fraction of the scan lies on the map; 1 never keeps one");
 }
 
-struct MapMatchResult {
-  SE2 T_map_robot;                                   // the estimate (the guess when not converged)
-  Covariance3 covariance = unknown_covariance();
-  bool converged = false;        // the correlative search found an inner maximum above min_score
-  bool refined = false;          // the refinement was applied
-  double score = 0.0;            // 1, in [0, 1]: fraction of the scan's points on the map (correlative inliers)
-  bool degenerate = false;
-  double inlier_fraction = 0.0;  // 1: scan points within inlier_distance of a map point at the estimate (converged only)
-};
-
 /// Throws Error for out-of-range values.
 void validate(const MapMatchConfig& config);
 
@@ -78,7 +77,7 @@ MatchMap make_match_map(PointCloud2 cloud, const MapMatchConfig& config);
 
 /// Matches the robot-frame `scan` against the map from the guess. A map or scan of fewer than 3
 /// points gives converged = false and the guess.
-MapMatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
-                                      const MapMatchConfig& config);
+MatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot_guess,
+                                  const MapMatchConfig& config);
 
 }  // namespace slam2d

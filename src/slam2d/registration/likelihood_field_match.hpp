@@ -4,7 +4,8 @@
 // of the scan's end points to the nearest obstacle of the map,
 //   T* = argmin_T sum_i d(T p_i)^2,
 // with d the likelihood field's distance (grid/likelihood_field.hpp: exact EDT, bilinear, with
-// its exact gradient), by Levenberg-Marquardt from the predicted pose (a step is taken only if it
+// its exact gradient), by Levenberg-Marquardt from the predicted pose (the shared driver,
+// optim/levenberg_marquardt.hpp, on the cost LikelihoodFieldCost: a step is taken only if it
 // lowers the truncated cost sum min(d, outlier_distance)^2, else the damping grows; converged when
 // the step falls below epsilon): the point-to-distance-field form
 // of ICP against the map's points (A. Fitzgibbon, "Robust registration of 2D and 3D point sets",
@@ -14,12 +15,12 @@
 // The covariance is sigma^2 (J^T J)^-1 at the optimum (the Hessian approximation, as Hector's
 // and Censi's covariance-from-Hessian), with sigma the larger of config.sigma and the RMS
 // residual, so a poor fit widens it. MatchResult::inliers counts the end points within
-// inlier_distance of an obstacle after the match (over all points: the EKF's gate), and
+// inlier_distance of an obstacle after the match (over all points: the EKF's gate;
+// inlier_fraction = inliers / points), cost is sum d^2 / 2 of the points used, and
 // degenerate / weak_direction say whether the fit's information J^T J constrains every direction
 // (a corridor's axis does not; registration/degeneracy.hpp).
 
 #include <Eigen/Core>
-#include <cstddef>
 #include <vector>
 
 #include "slam2d/core/config_fields.hpp"
@@ -55,10 +56,5 @@ void describe(Fields& f, LikelihoodFieldMatchConfig& c) {
 /// small with >= 3 points; residual: the RMS distance of the points used (m).
 MatchResult match_likelihood_field(const LikelihoodField& field, const std::vector<Eigen::Vector2d>& points_robot,
                                    const SE2& T_map_robot_guess, const LikelihoodFieldMatchConfig& config = {});
-
-/// The share of `points` end points that are inliers of `result` (0 for none).
-inline double inlier_fraction(const MatchResult& result, std::size_t points) {
-  return points == 0 ? 0.0 : static_cast<double>(result.inliers) / static_cast<double>(points);
-}
 
 }  // namespace slam2d

@@ -26,6 +26,20 @@ struct MatchResult {
   double residual = 0.0;        // m, RMS of the inlier residuals at the estimate (search methods: see their header)
   bool degenerate = false;      // the scene does not constrain every direction (degeneracy.hpp)
   Eigen::Vector3d weak_direction = Eigen::Vector3d::Zero();  // (x, y, theta), unit; the least constrained direction
+  // Map matchers (scan to map; 0 from the scan-to-scan matchers):
+  double inlier_fraction = 0.0; // 1, in [0, 1]: inliers / the points offered (the matcher's own inlier test)
+  double score = 0.0;           // 1, in [0, 1]: a search method's response at its best pose (correlative: the
+                                // share of the points on the table's occupied cells); 0 from least squares
+  double cost = 0.0;            // the objective minimised, at the estimate, in the matcher's units (Hector:
+                                // sum r^2 / 2 with the prior's cost): compares starts of one matcher on one scan
+
+  /// The inverse covariance; zero when the covariance is unknown (kUnknownVariance all along the
+  /// diagonal, unknown_covariance()): unknown is zero information, never a confident guess. A
+  /// single direction at kUnknownVariance gets 1 / kUnknownVariance, next to nothing.
+  Eigen::Matrix3d information() const {
+    if (covariance.diagonal().minCoeff() >= kUnknownVariance) return Eigen::Matrix3d::Zero();
+    return information_from_covariance(covariance);
+  }
 };
 
 /// Any matcher with its configuration bound: what scan odometry, benchmarks and SLAM front ends

@@ -7,6 +7,8 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/bilinear.hpp"
+#include "slam2d/optim/levenberg_marquardt.hpp"
+#include "slam2d/registration/degeneracy.hpp"
 
 namespace slam2d {
 
@@ -69,71 +71,97 @@ Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
   return variance * *inverse;
 }
 
-}  // namespace
+// The least constrained direction of the scan's own information (H without the prior) at the
+// estimate (registration/degeneracy.hpp, rotation scaled at the points' RMS distance).
+Eigen::Vector3d weakest_direction(const NormalEquations<3>& equations, const SE2& T_map_robot,
+                                  const std::vector<Eigen::Vector2d>& points_robot, const std::optional<PosePrior>& prior) {
+  Eigen::Matrix3d scan_information = equations.H;
+  if (prior) {
+    NormalEquations<3> prior_only;
+    add_pose_prior(prior_only, T_map_robot, *prior);
+    scan_information -= prior_only.H;
+  }
+  double squared_radius = 0.0;
+  for (const Eigen::Vector2d& p : points_robot) squared_radius += p.squaredNorm();
+  const double radius = std::sqrt(squared_radius / static_cast<double>(std::max<std::size_t>(points_robot.size(), 1)));
+  return analyze_information(scan_information, radius > 0.0 ? radius : 1.0).weak_direction;
+}
 
-HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                     const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
-                                     const std::optional<PosePrior>& prior) {
+// Hector's Gauss-Newton problem on one grid for the driver (optim/levenberg_marquardt.hpp):
+// Eq. (12)-(14) plus the optional pose prior, and the step shaping (solution remapping, clamps).
+struct HectorCost {
+  const OccupancyGrid& grid;
+  const std::vector<Eigen::Vector2d>& points_robot;
+  const HectorMatcherConfig& config;
+  const std::optional<PosePrior>& prior;
   Eigen::Matrix3d scan_information = Eigen::Matrix3d::Zero();  // H of the scan alone, at the last linearisation
-  const auto linearize = [&](const SE2& pose) {
+
+  NormalEquations<3> linearize(const Eigen::Vector3d& xi) {
+    const SE2 pose = SE2::from_vector(xi);
     NormalEquations<3> equations = hector_linearize(grid, points_robot, pose, config.kernel);
     scan_information = equations.H;
     if (prior) add_pose_prior(equations, pose, *prior);
     return equations;
-  };
-  HectorMatchResult result;
-  result.points = points_robot.size();
-  Eigen::Vector3d xi = T_map_robot_guess.vector();
-  result.equations = linearize(T_map_robot_guess);
-  for (int iteration = 0; iteration < iterations; ++iteration) {
-    const auto step = solve_step(result.equations);  // Eq. (12): dxi = H^-1 sum J^T (1 - M), H of Eq. (13)
-    result.degenerate = !step.has_value();
-    if (!step) break;
-    Eigen::Vector3d dxi = *step;
+  }
+  Eigen::Vector3d plus(const Eigen::Vector3d& xi, const Eigen::Vector3d& dxi) const { return pose_plus(xi, dxi); }
+  Eigen::Vector3d shape_step(Eigen::Vector3d dxi) const {
     if (config.degeneracy_ratio > 0.0) dxi = constrained_projector(scan_information, config.degeneracy_ratio) * dxi;
     dxi.z() = std::clamp(dxi.z(), -config.max_rotation_step, config.max_rotation_step);
     const double max_translation = config.max_translation_step * grid.geometry().resolution;
     if (dxi.head<2>().norm() > max_translation) dxi.head<2>() *= max_translation / dxi.head<2>().norm();
-    ++result.iterations;
-    // Keep the step only if the cost drops, else halve it (a Gauss-Newton step can overshoot
-    // on a map that is far from quadratic); give up after a few halvings.
-    bool accepted = false;
-    for (int halving = 0; halving <= config.max_step_halvings && !accepted; ++halving, dxi *= 0.5) {
-      Eigen::Vector3d candidate = xi + dxi;
-      candidate.z() = normalize_angle(candidate.z());
-      NormalEquations<3> equations = linearize(SE2::from_vector(candidate));
-      if (equations.cost <= result.equations.cost) {
-        xi = candidate;
-        result.equations = equations;
-        accepted = true;
-      }
-    }
-    result.converged = !accepted || (dxi.head<2>().norm() < 2.0 * config.convergence_step &&
-                                     std::abs(dxi.z()) < 2.0 * config.convergence_step);
-    if (result.converged) break;
+    return dxi;
   }
-  result.T_map_robot = SE2::from_vector(xi);
-  result.covariance = covariance_from_hessian(result.equations);
-  const std::size_t n = std::max<std::size_t>(result.equations.residuals, 1);
-  result.mean_squared_residual = 2.0 * result.equations.cost / static_cast<double>(n);
+};
+
+// The driver's options for Hector's loop: plain Gauss-Newton steps (Eq. 12), a step that raises
+// the cost halved up to max_step_halvings times, else the level ends. A level stops when an
+// accepted step is below 4 convergence_step (translation and rotation each): the threshold the
+// loop has always applied (it tested half the accepted step against twice convergence_step).
+LevenbergMarquardtConfig gauss_newton_options(const HectorMatcherConfig& config, int iterations) {
+  return {.max_iterations = iterations,
+          .initial_lambda = 0.0,
+          .adapt = false,
+          .max_step_halvings = config.max_step_halvings,
+          .step_translation = 4.0 * config.convergence_step,
+          .step_rotation = 4.0 * config.convergence_step};
+}
+
+}  // namespace
+
+MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                               const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
+                               const std::optional<PosePrior>& prior) {
+  HectorCost cost{grid, points_robot, config, prior};
+  const LevenbergMarquardtResult<3> fit =
+      levenberg_marquardt<3>(cost, T_map_robot_guess.vector(), gauss_newton_options(config, iterations));
+  MatchResult result;
+  result.T_target_source = SE2::from_vector(fit.x);
+  result.covariance = covariance_from_hessian(fit.equations);
+  result.converged = fit.converged;
+  result.degenerate = fit.stop == LevenbergMarquardtStop::kNoStep;
+  result.iterations = fit.iterations;
+  result.inliers = fit.equations.residuals;
+  result.cost = fit.equations.cost;
+  result.residual = std::sqrt(mean_squared_residual(result));
+  result.weak_direction = weakest_direction(fit.equations, SE2::from_vector(fit.x), points_robot, prior);
   return result;
 }
 
 namespace {
 
 // The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost wins.
-HectorMatchResult match_with_rotation_search(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+MatchResult match_with_rotation_search(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                              const SE2& guess, int iterations, const HectorMatcherConfig& config,
                                              const std::optional<PosePrior>& prior) {
-  HectorMatchResult best = match_scan_to_grid(grid, points_robot, guess, iterations, config, prior);
+  MatchResult best = match_scan_to_grid(grid, points_robot, guess, iterations, config, prior);
   const int starts = static_cast<int>(std::floor(config.rotation_search_range / config.rotation_search_step + 1e-9));
   for (int k = -starts; k <= starts; ++k) {
     if (k == 0) continue;
     const SE2 start = guess * SE2(0.0, 0.0, k * config.rotation_search_step);
-    HectorMatchResult candidate = match_scan_to_grid(grid, points_robot, start, iterations, config, prior);
+    MatchResult candidate = match_scan_to_grid(grid, points_robot, start, iterations, config, prior);
     // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
     // round hall) near-equal costs would otherwise pick a far heading at random.
-    if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost) {
+    if (candidate.cost < (1.0 - config.rotation_search_margin) * best.cost) {
       best = std::move(candidate);
     }
   }
@@ -142,28 +170,27 @@ HectorMatchResult match_with_rotation_search(const OccupancyGrid& grid, const st
 
 }  // namespace
 
-HectorMatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
-                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
-                                        const std::optional<PosePrior>& prior) {
+MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
+                                  const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
+                                  const std::optional<PosePrior>& prior) {
   validate(config);
-  if (points_robot.empty()) {
-    HectorMatchResult result;
-    result.T_map_robot = T_map_robot_guess;
-    result.covariance = unknown_covariance();
+  if (points_robot.size() < 3) {  // fewer points than the pose has degrees of freedom
+    MatchResult result;
+    result.T_target_source = T_map_robot_guess;
     result.degenerate = true;
     return result;
   }
   SE2 pose = T_map_robot_guess;
   int iterations = 0;
   for (int level = pyramid.levels() - 1; level >= 1; --level) {  // coarse to fine, Sec. IV-C
-    const HectorMatchResult coarse =
+    const MatchResult coarse =
         level == pyramid.levels() - 1
             ? match_with_rotation_search(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior)
             : match_scan_to_grid(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior);
-    pose = coarse.T_map_robot;
+    pose = coarse.T_target_source;
     iterations += coarse.iterations;
   }
-  HectorMatchResult fine =
+  MatchResult fine =
       match_scan_to_grid(pyramid.level(0), points_robot, pose, config.fine_iterations, config, prior);
   fine.iterations += iterations;
   return fine;

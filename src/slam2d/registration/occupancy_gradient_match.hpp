@@ -9,21 +9,33 @@
 //   dxi = H^-1 sum_i [grad M(S_i) dS_i/dxi]^T (1 - M(S_i)),                                Eq. (12)-(13)
 //   H = sum_i [grad M(S_i) dS_i/dxi]^T [grad M(S_i) dS_i/dxi],
 //   dS_i/dxi = [1 0 -sin(psi) s_x - cos(psi) s_y; 0 1 cos(psi) s_x - sin(psi) s_y],       Eq. (14)
-// accumulated and solved with optim/normal_equations.hpp. On a map pyramid the coarsest level is
-// matched first and each level's result starts the next (Sec. IV-C).
+// accumulated in optim/normal_equations.hpp (hector_linearize: the cost) and iterated by the shared
+// driver optim/levenberg_marquardt.hpp in plain Gauss-Newton mode, with step clamps, step halving,
+// solution remapping and an optional pose prior. On a map pyramid the coarsest level is matched
+// first and each level's result starts the next (Sec. IV-C).
+//
+// The MatchResult: T_target_source is T_map_robot; covariance s^2 H^-1 on the finest level
+// (unknown when H is singular or there are <= 3 points); converged: the finest level's last step
+// was small; degenerate: H was singular on the finest level (the pose was not fully improved; the
+// RBPF's proposal relies on this meaning); weak_direction: the least constrained direction of the
+// scan's information (registration/degeneracy.hpp), also when not degenerate;
+// iterations: Gauss-Newton steps over all levels; inliers: the end points (all are residuals);
+// residual: the RMS of r = 1 - M (1, not m; the prior's cost included); cost: sum r^2 / 2 plus the
+// prior's, on the finest level.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <vector>
 
 #include "slam2d/core/config_fields.hpp"
-#include "slam2d/core/covariance.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/optim/normal_equations.hpp"
 #include "slam2d/optim/robust_kernel.hpp"
+#include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
 
@@ -69,17 +81,6 @@ void describe(Fields& f, HectorMatcherConfig& c) {
            "solution remapping (Zhang et al. 2016): steps projected onto the scan's eigenvectors above this fraction of the largest (0: off)");
 }
 
-struct HectorMatchResult {
-  SE2 T_map_robot;                // the estimate
-  Covariance3 covariance = unknown_covariance();  // m^2, m rad, rad^2: s^2 H^-1 on the finest level; unknown when unconstrained
-  NormalEquations<3> equations;   // the last linearisation on the finest level (H, b, cost)
-  bool converged = false;         // the finest level's last step was below convergence_step
-  bool degenerate = false;        // H singular on the finest level: the pose was not (fully) improved
-  int iterations = 0;             // Gauss-Newton steps over all levels
-  std::size_t points = 0;         // end points used
-  double mean_squared_residual = 0.0;  // 1, mean of (1 - M)^2 on the finest level
-};
-
 /// An optional Gaussian prior on the pose (not in the paper): adds the residual xi - mean with
 /// weight `information` (1/m^2, 1/rad^2) to the normal equations, so that directions the scan
 /// leaves undetermined (a corridor's axis) follow the motion prediction instead of staying put.
@@ -105,14 +106,21 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
                                     const SE2& T_map_robot, const RobustKernel& kernel = {});
 
 /// `iterations` Gauss-Newton steps on one grid from `T_map_robot_guess`.
-HectorMatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                     const SE2& T_map_robot_guess, int iterations,
-                                     const HectorMatcherConfig& config = {}, const std::optional<PosePrior>& prior = {});
+MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                               const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config = {},
+                               const std::optional<PosePrior>& prior = {});
 
 /// Coarse to fine over the pyramid's levels (coarse_iterations steps each, fine_iterations on
-/// level 0); the covariance is that of level 0. An empty point set returns the guess, degenerate.
-HectorMatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
-                                        const SE2& T_map_robot_guess, const HectorMatcherConfig& config = {},
-                                        const std::optional<PosePrior>& prior = {});
+/// level 0); the covariance is that of level 0. Fewer than 3 points return the guess, degenerate,
+/// with an unknown covariance.
+MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
+                                  const SE2& T_map_robot_guess, const HectorMatcherConfig& config = {},
+                                  const std::optional<PosePrior>& prior = {});
+
+/// Hector's fit measure: the mean of (1 - M)^2 over the end points on the finest level (the
+/// prior's cost included), 2 cost / inliers; 0 for no points.
+inline double mean_squared_residual(const MatchResult& hector_match) {
+  return 2.0 * hector_match.cost / static_cast<double>(std::max<std::size_t>(hector_match.inliers, 1));
+}
 
 }  // namespace slam2d

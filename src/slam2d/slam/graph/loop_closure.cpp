@@ -196,25 +196,25 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
     const double radius = config_.map_radius + largest_window(coarse->correlative);
     const MatchMap map =
         make_match_map(map_cloud(members, poses, guess.translation(), radius, coarse->map_voxel), *coarse);
-    const MapMatchResult found = match_correlative_map(map, scan, guess, *coarse);
+    const MatchResult found = match_correlative_map(map, scan, guess, *coarse);
     if (!found.converged) return std::nullopt;
-    start = found.T_map_robot;
+    start = found.T_target_source;
   }
   const double radius = config_.map_radius + largest_window(match_config.correlative);
   const MatchMap map =
       make_match_map(map_cloud(members, poses, start.translation(), radius, match_config.map_voxel), match_config);
-  const MapMatchResult match = match_correlative_map(map, scan, start, match_config);
-  if (!match.converged || !match.refined || match.inlier_fraction < config_.min_inlier_fraction) return std::nullopt;
+  const MatchResult match = match_correlative_map(map, scan, start, match_config);
+  if (!match.converged || match.inlier_fraction < config_.min_inlier_fraction) return std::nullopt;
   if (config_.reject_degenerate && match.degenerate) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> translation(match.covariance.topLeftCorner<2, 2>());
   if (translation.eigenvalues().maxCoeff() > config_.max_translation_variance) return std::nullopt;
-  const std::size_t anchor = nearest_keyframe(keyframes, graph, chain, match.T_map_robot.translation());
+  const std::size_t anchor = nearest_keyframe(keyframes, graph, chain, match.T_target_source.translation());
   const SE2& T_map_anchor = node_pose(graph, keyframes[anchor]);
   const SE2& estimate = node_pose(graph, keyframes[current]);
   LoopClosure closure;
   closure.edge.from = static_cast<int>(keyframes[anchor].node);
   closure.edge.to = static_cast<int>(keyframes[current].node);
-  closure.edge.T_from_to = T_map_anchor.between(match.T_map_robot);
+  closure.edge.T_from_to = T_map_anchor.between(match.T_target_source);
   // The match's covariance is in the map frame; the edge's is in the anchor's frame.
   closure.edge.information = information_from_covariance(rotate_covariance(match.covariance, -T_map_anchor.theta()));
   closure.edge.robust = true;
@@ -224,9 +224,9 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
   closure.anchor = anchor;
   closure.chain_begin = chain.first;
   closure.chain_end = chain.second;
-  closure.T_map_matched = match.T_map_robot;
-  closure.correction_translation = (match.T_map_robot.translation() - estimate.translation()).norm();
-  closure.correction_rotation = std::abs(angle_difference(match.T_map_robot.theta(), estimate.theta()));
+  closure.T_map_matched = match.T_target_source;
+  closure.correction_translation = (match.T_target_source.translation() - estimate.translation()).norm();
+  closure.correction_rotation = std::abs(angle_difference(match.T_target_source.theta(), estimate.theta()));
   return closure;
 }
 

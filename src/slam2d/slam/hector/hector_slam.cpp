@@ -73,7 +73,7 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   if (last_pose_) {  // Sec. IV-B/C: match against the map built so far
     step.match = match(corrected, inputs, step.prediction);
     step.matched = true;
-    step.T_map_robot = step.match.T_map_robot;
+    step.T_map_robot = step.match.T_target_source;
     step.covariance = step.match.covariance;
   }
   if (!last_pose_ || (!odometry_.hold_map && needs_map_update(step.T_map_robot))) {
@@ -89,29 +89,29 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   return step;
 }
 
-HectorMatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const {
+MatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const {
   std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
   const bool with_odometry = odometry_trusted();
-  HectorMatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt);
+  MatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt);
   if (const std::optional<UntrustedStarts> starts = untrusted_starts(); starts && starts->second) {
-    HectorMatchResult second = match_from(points, *starts->second, false, std::nullopt);
-    if (second.equations.cost < kCompetingStartAdvantage * result.equations.cost) result = std::move(second);
+    MatchResult second = match_from(points, *starts->second, false, std::nullopt);
+    if (second.cost < kCompetingStartAdvantage * result.cost) result = std::move(second);
   }
   return result;
 }
 
 // Gauss-Newton on the pyramid from `start`, with the odometry settings or those without, and
 // the retry over every heading after a poor fit (e.g. the robot turned during a gap in the log).
-HectorMatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start,
+MatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start,
                                          bool with_odometry, const std::optional<PosePrior>& prior) const {
   const HectorMatcherConfig& matcher = with_odometry ? config_.matcher : free_matcher_;
-  HectorMatchResult result = match_scan_to_pyramid(map_, points, start, matcher, prior);
-  if (result.mean_squared_residual > recovery_residual(with_odometry)) {
+  MatchResult result = match_scan_to_pyramid(map_, points, start, matcher, prior);
+  if (mean_squared_residual(result) > recovery_residual(with_odometry)) {
     HectorMatcherConfig wide = matcher;
     wide.rotation_search_range = std::numbers::pi;
-    HectorMatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
-    if (retry.equations.cost < result.equations.cost) result = std::move(retry);
+    MatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
+    if (retry.cost < result.cost) result = std::move(retry);
   }
   return result;
 }

@@ -133,7 +133,7 @@ struct HectorStep {
   SE2 T_map_robot;
   Covariance3 covariance = Covariance3::Zero();  // from the Gauss-Newton Hessian; zero on the first scan
   SE2 prediction;                                // the matcher's initial guess
-  HectorMatchResult match;                       // empty on the first scan
+  MatchResult match;                       // empty on the first scan
   bool matched = false;                          // false on the first scan (no map yet)
   bool map_updated = false;
   OdometryCheck odometry;                        // the guard's verdict (kOdometry prior only)
@@ -158,12 +158,12 @@ class HectorSlam {
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
 
  private:
-  HectorMatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
+  MatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
     std::optional<SE2> second;   // the competing start, if any (kCompetingStartAdvantage)
   };
-  HectorMatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
+  MatchResult match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start, bool with_odometry,
                                const std::optional<PosePrior>& prior) const;
   std::optional<UntrustedStarts> untrusted_starts() const;
   double recovery_residual(bool with_odometry) const;

@@ -138,14 +138,14 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
   const PosePrior prior{.mean = predicted,
                         .information = config.motion_prior_weight * config.likelihood_sigma * config.likelihood_sigma *
                                        R * inverse_variances.asDiagonal() * R.transpose()};
-  const HectorMatchResult match = match_scan_to_pyramid(map, points_robot, predicted, config.matcher,
-                                                        config.motion_prior_weight > 0.0 ? std::optional(prior) : std::nullopt);
-  const Eigen::Vector3d correction = local_coordinates(predicted, match.T_map_robot);
-  if (match.degenerate || match.mean_squared_residual > config.max_match_residual ||
+  const MatchResult match = match_scan_to_pyramid(map, points_robot, predicted, config.matcher,
+                                                  config.motion_prior_weight > 0.0 ? std::optional(prior) : std::nullopt);
+  const Eigen::Vector3d correction = local_coordinates(predicted, match.T_target_source);
+  if (match.degenerate || mean_squared_residual(match) > config.max_match_residual ||
       correction.head<2>().norm() > config.max_match_translation || std::abs(correction.z()) > config.max_match_rotation) {
     return result;
   }
-  result.x_star = match.T_map_robot;
+  result.x_star = match.T_target_source;
   if (!fit) {
     result.matched = true;
     return result;
