@@ -46,6 +46,12 @@ const MethodEntry* find_method(const std::string& name) {
   return nullptr;
 }
 
+[[noreturn]] void unknown_name(const std::string& name) {
+  std::string list;
+  for (const std::string& known : configurable_names()) list += (list.empty() ? "" : ", ") + known;
+  throw Error("unknown method or matcher '" + name + "' (known: " + list + ")");
+}
+
 bool is_matcher(const std::string& name) {
   const auto& names = matcher_names();
   return std::find(names.begin(), names.end(), name) != names.end();
@@ -83,15 +89,13 @@ ConfigNode load_method_preset(const std::string& path, const std::string& method
 std::string default_preset(const std::string& name) {
   if (find_method(name) != nullptr) return "method: " + name + "\n" + config_yaml(method_fields(name));
   if (is_matcher(name)) return "matcher: " + name + "\n" + config_yaml(matcher_fields(name));
-  method_fields(name);  // the error naming the methods
-  return {};
+  unknown_name(name);
 }
 
 std::string config_table(const std::string& name) {
   if (find_method(name) != nullptr) return config_markdown(method_fields(name));
   if (is_matcher(name)) return config_markdown(matcher_fields(name));
-  method_fields(name);
-  return {};
+  unknown_name(name);
 }
 
 std::vector<std::string> configurable_names() {
