@@ -126,14 +126,37 @@ LevenbergMarquardtConfig gauss_newton_options(const HectorMatcherConfig& config,
           .step_rotation = 4.0 * config.convergence_step};
 }
 
-}  // namespace
-
-MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                               const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
-                               const std::optional<PosePrior>& prior) {
+// One Gauss-Newton run on one grid (the driver's fit: pose, last linearisation, iterations).
+LevenbergMarquardtResult<3> fit_on_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                                        const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
+                                        const std::optional<PosePrior>& prior) {
   HectorCost cost{grid, points_robot, config, prior};
-  const LevenbergMarquardtResult<3> fit =
-      levenberg_marquardt<3>(cost, T_map_robot_guess.vector(), gauss_newton_options(config, iterations));
+  return levenberg_marquardt<3>(cost, T_map_robot_guess.vector(), gauss_newton_options(config, iterations));
+}
+
+// The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost wins.
+LevenbergMarquardtResult<3> fit_with_rotation_search(const OccupancyGrid& grid,
+                                                     const std::vector<Eigen::Vector2d>& points_robot, const SE2& guess,
+                                                     int iterations, const HectorMatcherConfig& config,
+                                                     const std::optional<PosePrior>& prior) {
+  LevenbergMarquardtResult<3> best = fit_on_grid(grid, points_robot, guess, iterations, config, prior);
+  const int starts = static_cast<int>(std::floor(config.rotation_search_range / config.rotation_search_step + 1e-9));
+  for (int k = -starts; k <= starts; ++k) {
+    if (k == 0) continue;
+    const SE2 start = guess * SE2(0.0, 0.0, k * config.rotation_search_step);
+    LevenbergMarquardtResult<3> candidate = fit_on_grid(grid, points_robot, start, iterations, config, prior);
+    // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
+    // round hall) near-equal costs would otherwise pick a far heading at random.
+    if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost) {
+      best = std::move(candidate);
+    }
+  }
+  return best;
+}
+
+// The match result of the finest fit: s^2 H^-1, the residuals, the scan's weakest direction.
+MatchResult match_result(const LevenbergMarquardtResult<3>& fit, const std::vector<Eigen::Vector2d>& points_robot,
+                         const std::optional<PosePrior>& prior) {
   MatchResult result;
   result.T_target_source = SE2::from_vector(fit.x);
   result.covariance = covariance_from_hessian(fit.equations);
@@ -147,28 +170,13 @@ MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eige
   return result;
 }
 
-namespace {
-
-// The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost wins.
-MatchResult match_with_rotation_search(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
-                                             const SE2& guess, int iterations, const HectorMatcherConfig& config,
-                                             const std::optional<PosePrior>& prior) {
-  MatchResult best = match_scan_to_grid(grid, points_robot, guess, iterations, config, prior);
-  const int starts = static_cast<int>(std::floor(config.rotation_search_range / config.rotation_search_step + 1e-9));
-  for (int k = -starts; k <= starts; ++k) {
-    if (k == 0) continue;
-    const SE2 start = guess * SE2(0.0, 0.0, k * config.rotation_search_step);
-    MatchResult candidate = match_scan_to_grid(grid, points_robot, start, iterations, config, prior);
-    // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
-    // round hall) near-equal costs would otherwise pick a far heading at random.
-    if (candidate.cost < (1.0 - config.rotation_search_margin) * best.cost) {
-      best = std::move(candidate);
-    }
-  }
-  return best;
-}
-
 }  // namespace
+
+MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                               const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
+                               const std::optional<PosePrior>& prior) {
+  return match_result(fit_on_grid(grid, points_robot, T_map_robot_guess, iterations, config, prior), points_robot, prior);
+}
 
 MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
                                   const SE2& T_map_robot_guess, const HectorMatcherConfig& config,
@@ -180,18 +188,22 @@ MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<E
     result.degenerate = true;
     return result;
   }
-  SE2 pose = T_map_robot_guess;
+  // Coarse to fine (Sec. IV-C): only the finest level's fit becomes the result (its covariance
+  // and weak direction); the coarser ones only pass their pose on.
+  Eigen::Vector3d pose = T_map_robot_guess.vector();
   int iterations = 0;
-  for (int level = pyramid.levels() - 1; level >= 1; --level) {  // coarse to fine, Sec. IV-C
-    const MatchResult coarse =
+  for (int level = pyramid.levels() - 1; level >= 1; --level) {
+    const SE2 start = SE2::from_vector(pose);
+    const LevenbergMarquardtResult<3> coarse =
         level == pyramid.levels() - 1
-            ? match_with_rotation_search(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior)
-            : match_scan_to_grid(pyramid.level(level), points_robot, pose, config.coarse_iterations, config, prior);
-    pose = coarse.T_target_source;
+            ? fit_with_rotation_search(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior)
+            : fit_on_grid(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior);
+    pose = coarse.x;
     iterations += coarse.iterations;
   }
-  MatchResult fine =
-      match_scan_to_grid(pyramid.level(0), points_robot, pose, config.fine_iterations, config, prior);
+  MatchResult fine = match_result(
+      fit_on_grid(pyramid.level(0), points_robot, SE2::from_vector(pose), config.fine_iterations, config, prior),
+      points_robot, prior);
   fine.iterations += iterations;
   return fine;
 }
