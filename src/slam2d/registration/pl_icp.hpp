@@ -71,7 +71,7 @@ struct PlIcpConfig {
 
 template <typename Fields>
 void describe(Fields& f, PlIcpConfig& c) {
-  f.number("max_iterations", c.max_iterations, "1", at_least(1), "(CSM sm2: 1000; converges in ~10)");
+  f.number("max_iterations", c.max_iterations, "1", at_least(1), "(CSM sm2: 1000; converges in about 5 on Intel: docs/methods/pl_icp.md)");
   f.number("epsilon_xy", c.epsilon_xy, "m", at_least(0), "stop when the step's translation is below this ...");
   f.number("epsilon_theta", c.epsilon_theta, "rad", at_least(0), "... and its rotation below this (CSM: 1e-4, 1e-4)");
   f.number("max_correspondence_distance", c.max_correspondence_distance, "m", greater_than(0), "j1 farther than this from p_i^w gives no pair");
