@@ -28,7 +28,7 @@ struct DegeneracyConfig {
 
 template <typename Fields>
 void describe(Fields& f, DegeneracyConfig& c) {
-  f.number("min_eigenvalue_ratio", c.min_eigenvalue_ratio, "1", open_interval(0, 1), "smallest over largest scaled eigenvalue below which the match is degenerate");
+  f.number("min_eigenvalue_ratio", c.min_eigenvalue_ratio, "1", between(0, 1), "smallest over largest scaled eigenvalue below which the match is degenerate");
   f.number("range_sigma", c.range_sigma, "m", greater_than(0), "sensor noise that scales the information");
 }
 
