@@ -22,8 +22,8 @@ namespace slam2d {
 
 /// One topic (ROS 1: connection topic; MCAP: channel; rosbag2: topics row) of a bag.
 struct BagTopic {
-  std::string name;        // "/scan"
-  std::string type;        // as the bag spells it: "sensor_msgs/LaserScan" (ROS 1) or "sensor_msgs/msg/LaserScan"
+  std::string name = {};        // "/scan"
+  std::string type = {};        // as the bag spells it: "sensor_msgs/LaserScan" (ROS 1) or "sensor_msgs/msg/LaserScan"
   std::size_t count = 0;   // messages on it
   double first_stamp = 0.0;  // s, receive time of its first and last message (0 when count is 0)
   double last_stamp = 0.0;
@@ -33,36 +33,36 @@ struct BagTopic {
 /// every range as published (NaN, +-inf, values outside [range_min, range_max] are kept: the
 /// assembly and LaserScan::is_valid treat them as "no return"); T_robot_sensor is identity.
 struct DecodedScan {
-  std::string frame_id;
-  LaserScan scan;
+  std::string frame_id = {};
+  LaserScan scan = {};
 };
 
 /// nav_msgs/Odometry: header.stamp, the planar pose (x, y, yaw of the quaternion), twist.linear.x
 /// and twist.angular.z.
 struct DecodedOdometry {
-  std::string frame_id;        // "odom"
-  std::string child_frame_id;  // "base_link"
-  OdometryReading reading;
+  std::string frame_id = {};        // "odom"
+  std::string child_frame_id = {};  // "base_link"
+  OdometryReading reading = {};
 };
 
 /// One geometry_msgs/TransformStamped, made planar (x, y, yaw).
 struct DecodedTransform {
   double stamp = 0.0;  // s, header.stamp
-  std::string parent;  // header.frame_id
-  std::string child;   // child_frame_id
-  SE2 T_parent_child;
+  std::string parent = {};  // header.frame_id
+  std::string child = {};   // child_frame_id
+  SE2 T_parent_child = {};
 };
 
 /// tf2_msgs/TFMessage, on /tf or /tf_static.
 struct DecodedTransforms {
   bool is_static = false;  // the topic is /tf_static
-  std::vector<DecodedTransform> transforms;
+  std::vector<DecodedTransform> transforms = {};
 };
 
 /// sensor_msgs/Imu: header.stamp, the yaw rate and the attitude's roll and pitch.
 struct DecodedImu {
   double stamp = 0.0;
-  std::string frame_id;
+  std::string frame_id = {};
   double roll = 0.0;      // rad
   double pitch = 0.0;     // rad
   double yaw_rate = 0.0;  // rad/s, angular_velocity.z
@@ -72,10 +72,10 @@ using DecodedMessage = std::variant<DecodedScan, DecodedOdometry, DecodedTransfo
 
 /// One decoded message with where it came from.
 struct DecodedRecord {
-  std::string topic;
+  std::string topic = {};
   double receive_time = 0.0;  // s: ROS 1 record time, MCAP log_time, rosbag2 timestamp
   std::size_t index = 0;      // its position in the file's own order (for messages: "record N")
-  DecodedMessage message;
+  DecodedMessage message = {};
 };
 
 /// A container reader: the bag's topics, and its messages of the wanted topics decoded, in time

@@ -1,0 +1,191 @@
+#include "slam2d/io/bag_log.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <utility>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+namespace {
+
+constexpr const char* kLaserScan = "sensor_msgs/LaserScan";
+constexpr const char* kOdometry = "nav_msgs/Odometry";
+constexpr const char* kImu = "sensor_msgs/Imu";
+constexpr const char* kTf = "tf2_msgs/TFMessage";
+
+// The topic `wanted` names (checked to exist and to have `type`), or the one topic of `type`;
+// "" when there is none and `required` is false.
+std::string pick(const std::string& path, const std::vector<BagTopic>& topics, const std::string& type,
+                 const std::string& wanted, const char* option, bool required) {
+  std::vector<std::string> candidates;
+  for (const BagTopic& topic : topics) {
+    if (ros_type_name(topic.type) == type) candidates.push_back(topic.name);
+  }
+  std::string list;
+  for (const std::string& name : candidates) list += (list.empty() ? "" : ", ") + name;
+  if (!wanted.empty()) {
+    for (const BagTopic& topic : topics) {
+      if (topic.name != wanted) continue;
+      check(ros_type_name(topic.type) == type, path + ": topic " + wanted + " is " + topic.type + ", not " + type);
+      return wanted;
+    }
+    throw Error(path + ": no topic " + wanted + " (" + type + " topics: " + (list.empty() ? "none" : list) + ")");
+  }
+  if (candidates.size() == 1) return candidates.front();
+  if (candidates.empty()) {
+    check(!required, path + ": no " + type + " topic in the bag");
+    return "";
+  }
+  throw Error(path + ": several " + type + " topics (" + list + "): choose one with " + option);
+}
+
+bool has_topic(const std::vector<BagTopic>& topics, const std::string& name, const char* type) {
+  return std::any_of(topics.begin(), topics.end(),
+                     [&](const BagTopic& topic) { return topic.name == name && ros_type_name(topic.type) == type; });
+}
+
+}  // namespace
+
+std::string ros_type_name(const std::string& type) {
+  const std::size_t at = type.find("/msg/");
+  return at == std::string::npos ? type : type.substr(0, at) + "/" + type.substr(at + 5);
+}
+
+BagChoice choose_topics(const std::string& path, const std::vector<BagTopic>& topics, const BagSelection& selection) {
+  BagChoice choice;
+  choice.scan_topic = pick(path, topics, kLaserScan, selection.scan_topic, "--scan-topic", true);
+  choice.odom_topic = pick(path, topics, kOdometry, selection.odom_topic, "--odom-topic", false);
+  if (choice.odom_topic.empty() && has_topic(topics, "/tf", kTf)) choice.odom_topic = "/tf";  // odom -> base
+  choice.imu_topic = pick(path, topics, kImu, selection.imu_topic, "--imu-topic", false);
+  choice.base_frame = selection.base_frame;
+  choice.odom_frame = selection.odom_frame;
+  return choice;
+}
+
+BagLogReader::BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection)
+    : source_(std::move(source)), choice_(choose_topics(source_->path(), source_->topics(), selection)) {
+  wanted_ = {choice_.scan_topic};
+  if (!choice_.odom_topic.empty()) wanted_.push_back(choice_.odom_topic);
+  if (has_topic(source_->topics(), "/tf_static", kTf)) wanted_.push_back("/tf_static");
+  if (choice_.odom_topic == "/tf" && (choice_.base_frame.empty() || choice_.odom_frame.empty())) {
+    if (choice_.base_frame.empty()) choice_.base_frame = "base_link";
+    if (choice_.odom_frame.empty()) choice_.odom_frame = "odom";
+  }
+}
+
+BagLogReader::~BagLogReader() = default;
+
+const std::string& BagLogReader::path() const { return source_->path(); }
+const std::vector<BagTopic>& BagLogReader::topics() const { return source_->topics(); }
+double BagLogReader::progress() const { return source_->progress(); }
+
+std::optional<SensorMessage> BagLogReader::next() {
+  while (ready_.empty() && !finished_) read_more();
+  if (ready_.empty()) return std::nullopt;
+  SensorMessage message = std::move(ready_.front());
+  ready_.pop_front();
+  return message;
+}
+
+void BagLogReader::read_more() {
+  std::optional<DecodedRecord> record = source_->next(wanted_);
+  if (record) {
+    take(std::move(*record));
+    return;
+  }
+  // The end: scans after the last odometry reading hold its pose.
+  release_scans_up_to(std::numeric_limits<double>::infinity());
+  finished_ = true;
+  if (choice_.base_frame.empty()) choice_.base_frame = "base_link";
+  if (choice_.odom_topic.empty() || !has_odometry_) {
+    warnings_.push_back(path() + ": no odometry in the bag (no Odometry topic, no odom -> base on /tf)");
+  }
+  if (!choice_.laser_frame.empty() && choice_.laser_frame != choice_.base_frame && !choice_.T_base_laser) {
+    warnings_.push_back(path() + ": no static transform " + choice_.base_frame + " -> " + choice_.laser_frame +
+                        ": the laser is taken at the robot's origin");
+  }
+}
+
+void BagLogReader::take(DecodedRecord record) {
+  if (auto* scan = std::get_if<DecodedScan>(&record.message)) {
+    if (choice_.laser_frame.empty()) {
+      choice_.laser_frame = scan->frame_id;
+      resolve_mounting();
+    }
+    pending_scans_.emplace_back(std::move(*scan), record.index);
+    if (!has_odometry_ && choice_.odom_topic.empty()) release_scans_up_to(pending_scans_.back().first.scan.stamp);
+    return;
+  }
+  if (auto* transforms = std::get_if<DecodedTransforms>(&record.message)) {
+    for (const DecodedTransform& transform : transforms->transforms) {
+      if (transforms->is_static || record.topic == "/tf_static") {
+        add_static(transform);
+      } else if (record.topic == choice_.odom_topic && transform.parent == choice_.odom_frame &&
+                 transform.child == choice_.base_frame) {
+        const OdometryReading reading{.stamp = transform.stamp, .pose = transform.T_parent_child};
+        odometry_.push_back(reading);
+        if (odometry_.size() > 2) odometry_.erase(odometry_.begin());
+        has_odometry_ = true;
+        release_scans_up_to(reading.stamp);
+        ready_.push_back(OdometryMessage{reading, record.index});
+      }
+    }
+    return;
+  }
+  if (auto* odometry = std::get_if<DecodedOdometry>(&record.message)) {
+    if (choice_.base_frame.empty()) choice_.base_frame = odometry->child_frame_id.empty() ? "base_link" : odometry->child_frame_id;
+    if (choice_.odom_frame.empty()) choice_.odom_frame = odometry->frame_id.empty() ? "odom" : odometry->frame_id;
+    odometry_.push_back(odometry->reading);
+    if (odometry_.size() > 2) odometry_.erase(odometry_.begin());
+    has_odometry_ = true;
+    release_scans_up_to(odometry->reading.stamp);
+    ready_.push_back(OdometryMessage{odometry->reading, record.index});
+  }
+}
+
+void BagLogReader::add_static(const DecodedTransform& transform) {
+  static_transforms_.push_back(transform);
+  resolve_mounting();
+}
+
+void BagLogReader::resolve_mounting() {
+  if (choice_.laser_frame.empty() || choice_.T_base_laser) return;
+  const std::string base = choice_.base_frame.empty() ? "base_link" : choice_.base_frame;
+  for (const DecodedTransform& known : static_transforms_) {  // one link, either direction
+    if (known.parent == base && known.child == choice_.laser_frame) choice_.T_base_laser = known.T_parent_child;
+    if (known.child == base && known.parent == choice_.laser_frame) choice_.T_base_laser = known.T_parent_child.inverse();
+  }
+}
+
+std::optional<SE2> BagLogReader::odometry_at(double stamp) const {
+  if (odometry_.empty()) return std::nullopt;
+  const OdometryReading& last = odometry_.back();
+  if (odometry_.size() == 1 || stamp >= last.stamp) return last.pose;
+  const OdometryReading& before = odometry_.front();
+  if (stamp <= before.stamp || !(last.stamp > before.stamp)) return before.pose;
+  return interpolate(before.pose, last.pose, (stamp - before.stamp) / (last.stamp - before.stamp));
+}
+
+void BagLogReader::release_scans_up_to(double stamp) {
+  while (!pending_scans_.empty() && pending_scans_.front().first.scan.stamp <= stamp) {
+    ready_.push_back(to_laser(pending_scans_.front().first, pending_scans_.front().second));
+    pending_scans_.pop_front();
+  }
+}
+
+LaserMessage BagLogReader::to_laser(const DecodedScan& scan, std::size_t index) const {
+  LaserMessage laser;
+  laser.type = "LaserScan";
+  laser.scan = scan.scan;
+  laser.scan.T_robot_sensor = choice_.T_base_laser.value_or(SE2());
+  laser.field_of_view = laser.scan.angle_max() - laser.scan.angle_min;  // as the message declares it
+  const std::optional<SE2> odom = odometry_at(scan.scan.stamp);
+  laser.has_poses = odom.has_value();
+  laser.odom_pose = odom.value_or(SE2());
+  laser.laser_pose = laser.odom_pose * laser.scan.T_robot_sensor;
+  laser.line = index;
+  return laser;
+}
+
+}  // namespace slam2d

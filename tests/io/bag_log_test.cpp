@@ -1,0 +1,164 @@
+// The bag assembly (io/bag_log.hpp) over a hand-made BagSource: topic choice, the laser's mounting
+// from the static transforms, the odometry interpolated at each scan, /tf as the odometry, time
+// order, and "no return" readings passed through as published.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/io/bag_log.hpp"
+
+namespace slam2d {
+namespace {
+
+// A bag whose messages are given in time order.
+class FakeSource : public BagSource {
+ public:
+  FakeSource(std::vector<BagTopic> topics, std::vector<DecodedRecord> records)
+      : topics_(std::move(topics)), records_(std::move(records)) {}
+  const std::string& path() const override { return path_; }
+  const std::vector<BagTopic>& topics() const override { return topics_; }
+  std::optional<DecodedRecord> next(const std::vector<std::string>& wanted) override {
+    while (at_ < records_.size()) {
+      const DecodedRecord& record = records_[at_++];
+      if (std::find(wanted.begin(), wanted.end(), record.topic) != wanted.end()) return record;
+    }
+    return std::nullopt;
+  }
+  double progress() const override { return records_.empty() ? 1.0 : static_cast<double>(at_) / records_.size(); }
+
+ private:
+  std::string path_ = "fake.bag";
+  std::vector<BagTopic> topics_;
+  std::vector<DecodedRecord> records_;
+  std::size_t at_ = 0;
+};
+
+DecodedRecord scan(double stamp, std::vector<double> ranges = {1.0, 2.0, 3.0}, const std::string& topic = "/scan") {
+  DecodedScan decoded;
+  decoded.frame_id = "laser";
+  decoded.scan.stamp = stamp;
+  decoded.scan.angle_min = -0.1;
+  decoded.scan.angle_increment = 0.1;
+  decoded.scan.range_min = 0.1;
+  decoded.scan.range_max = 30.0;
+  decoded.scan.ranges = std::move(ranges);
+  return {topic, stamp, 0, decoded};
+}
+
+DecodedRecord odometry(double stamp, const SE2& pose) {
+  DecodedOdometry decoded{.frame_id = "odom", .child_frame_id = "base_link", .reading = {.stamp = stamp, .pose = pose}};
+  return {"/odom", stamp, 0, decoded};
+}
+
+DecodedRecord static_transform(const std::string& parent, const std::string& child, const SE2& T) {
+  return {"/tf_static", 0.0, 0, DecodedTransforms{.is_static = true, .transforms = {{0.0, parent, child, T}}}};
+}
+
+const std::vector<BagTopic> kTopics = {{"/scan", "sensor_msgs/msg/LaserScan", 0, 0.0, 0.0},
+                                       {"/odom", "nav_msgs/Odometry", 0, 0.0, 0.0},
+                                       {"/tf_static", "tf2_msgs/TFMessage", 0, 0.0, 0.0}};
+
+std::vector<SensorMessage> read_all(BagLogReader& reader) {
+  std::vector<SensorMessage> messages;
+  while (auto message = reader.next()) messages.push_back(std::move(*message));
+  return messages;
+}
+
+TEST(BagLog, EachScanGetsTheOdometryInterpolatedAtItsStampInTimeOrder) {
+  BagLogReader reader(std::make_unique<FakeSource>(
+      kTopics, std::vector<DecodedRecord>{static_transform("base_link", "laser", SE2(0.04, 0.0, 0.0)),
+                                          odometry(0.0, SE2(0.0, 0.0, 0.0)), scan(0.5), odometry(1.0, SE2(1.0, 0.0, 0.2)),
+                                          scan(1.5)}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  ASSERT_EQ(messages.size(), 4u);
+  ASSERT_TRUE(std::holds_alternative<OdometryMessage>(messages[0]));
+  const auto& first = std::get<LaserMessage>(messages[1]);
+  EXPECT_TRUE(first.has_poses);
+  EXPECT_NEAR(first.odom_pose.x(), 0.5, 1e-12);
+  EXPECT_NEAR(first.odom_pose.theta(), 0.1, 1e-12);
+  EXPECT_NEAR(first.scan.T_robot_sensor.x(), 0.04, 1e-12) << "the mounting from /tf_static";
+  ASSERT_TRUE(std::holds_alternative<OdometryMessage>(messages[2]));
+  const auto& last = std::get<LaserMessage>(messages[3]);  // after the last reading: held
+  EXPECT_NEAR(last.odom_pose.x(), 1.0, 1e-12);
+  EXPECT_EQ(reader.choice().scan_topic, "/scan");
+  EXPECT_EQ(reader.choice().odom_topic, "/odom");
+  EXPECT_EQ(reader.choice().base_frame, "base_link");
+  EXPECT_TRUE(reader.warnings().empty());
+}
+
+TEST(BagLog, AStaticTransformTheOtherWayRoundIsInverted) {
+  BagLogReader reader(std::make_unique<FakeSource>(
+      kTopics, std::vector<DecodedRecord>{static_transform("laser", "base_link", SE2(-0.1, 0.0, 0.0)),
+                                          odometry(0.0, SE2()), scan(0.0)}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  EXPECT_NEAR(std::get<LaserMessage>(messages.back()).scan.T_robot_sensor.x(), 0.1, 1e-12);
+}
+
+TEST(BagLog, NoReturnReadingsPassThroughAsPublished) {
+  const double inf = std::numeric_limits<double>::infinity();
+  BagLogReader reader(std::make_unique<FakeSource>(
+      kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), scan(0.0, {1.0, inf, std::nan(""), 45.0, 0.01})}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  const LaserScan& laser = std::get<LaserMessage>(messages.back()).scan;
+  ASSERT_EQ(laser.size(), 5u);
+  EXPECT_TRUE(laser.is_valid(0));
+  for (std::size_t beam = 1; beam < 5; ++beam) EXPECT_FALSE(laser.is_valid(beam)) << beam;  // inf, NaN, > max, < min
+  EXPECT_NEAR(std::get<LaserMessage>(messages.back()).field_of_view, 0.4, 1e-12);
+}
+
+TEST(BagLog, WithoutAnOdometryTopicTheOdometryIsOdomToBaseOnTf) {
+  const std::vector<BagTopic> topics = {{"/scan", "sensor_msgs/LaserScan", 0, 0.0, 0.0},
+                                        {"/tf", "tf2_msgs/msg/TFMessage", 0, 0.0, 0.0}};
+  const auto tf = [](double stamp, const SE2& pose) {
+    return DecodedRecord{"/tf", stamp, 0,
+                         DecodedTransforms{.transforms = {{stamp, "odom", "base_link", pose}, {stamp, "map", "odom", SE2()}}}};
+  };
+  BagLogReader reader(std::make_unique<FakeSource>(
+      topics, std::vector<DecodedRecord>{tf(0.0, SE2()), scan(0.25), tf(1.0, SE2(2.0, 0.0, 0.0))}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  ASSERT_EQ(messages.size(), 3u);
+  EXPECT_NEAR(std::get<LaserMessage>(messages[1]).odom_pose.x(), 0.5, 1e-12);
+  EXPECT_EQ(reader.choice().odom_topic, "/tf");
+}
+
+TEST(BagLog, WithoutOdometryTheScansSayTheyHaveNoPoses) {
+  BagLogReader reader(std::make_unique<FakeSource>(std::vector<BagTopic>{{"/scan", "sensor_msgs/LaserScan", 0, 0.0, 0.0}},
+                                                   std::vector<DecodedRecord>{scan(0.0), scan(0.1)}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  ASSERT_EQ(messages.size(), 2u);
+  EXPECT_FALSE(std::get<LaserMessage>(messages[0]).has_poses);
+  ASSERT_EQ(reader.warnings().size(), 2u);  // and no mounting: no /tf_static
+  EXPECT_NE(reader.warnings()[0].find("no odometry"), std::string::npos);
+  EXPECT_NE(reader.warnings()[1].find("base_link -> laser"), std::string::npos);
+}
+
+TEST(BagLog, TheTopicChoiceIsAutomaticOnlyWhenUnambiguous) {
+  const std::vector<BagTopic> two = {{"/front", "sensor_msgs/LaserScan", 0, 0.0, 0.0},
+                                     {"/rear", "sensor_msgs/msg/LaserScan", 0, 0.0, 0.0},
+                                     {"/odom", "nav_msgs/Odometry", 0, 0.0, 0.0}};
+  try {
+    choose_topics("two.bag", two, {});
+    FAIL() << "two scan topics chosen silently";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("/front"), std::string::npos) << message;
+    EXPECT_NE(message.find("/rear"), std::string::npos) << message;
+    EXPECT_NE(message.find("--scan-topic"), std::string::npos) << message;
+  }
+  EXPECT_EQ(choose_topics("two.bag", two, {.scan_topic = "/rear"}).scan_topic, "/rear");
+  EXPECT_THROW(choose_topics("two.bag", two, {.scan_topic = "/odom"}), Error);   // not a LaserScan
+  EXPECT_THROW(choose_topics("two.bag", two, {.scan_topic = "/side"}), Error);   // no such topic
+  EXPECT_THROW(choose_topics("none.bag", {{"/odom", "nav_msgs/Odometry", 0, 0.0, 0.0}}, {}), Error);
+  EXPECT_EQ(ros_type_name("sensor_msgs/msg/LaserScan"), "sensor_msgs/LaserScan");
+  EXPECT_EQ(ros_type_name("nav_msgs/Odometry"), "nav_msgs/Odometry");
+}
+
+}  // namespace
+}  // namespace slam2d
