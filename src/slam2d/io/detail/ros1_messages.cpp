@@ -1,0 +1,173 @@
+#include "slam2d/io/detail/ros1_messages.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+namespace slam2d::ros1 {
+
+namespace {
+
+struct TypeInfo {
+  MessageType type;
+  std::string_view name;
+  std::string_view md5sum;
+};
+constexpr std::array<TypeInfo, 4> kTypes = {{
+    {MessageType::kLaserScan, "sensor_msgs/LaserScan", "90c7ef2dc6895d81024acba2ac42f369"},
+    {MessageType::kOdometry, "nav_msgs/Odometry", "cd5e73d190d741a2f92e81eda573aca7"},
+    {MessageType::kTFMessage, "tf2_msgs/TFMessage", "94810edda583a504dfda3829e70d7eec"},
+    {MessageType::kImu, "sensor_msgs/Imu", "6a62c6daae103f4ff57a132d6f95cec2"},
+}};
+
+// std_msgs/Header: uint32 seq, time stamp, string frame_id.
+struct Header {
+  double stamp = 0.0;
+  std::string frame_id;
+};
+Header read_header(WireReader& reader) {
+  reader.skip(4);  // seq
+  const double sec = reader.u32();
+  const double nsec = reader.u32();
+  return {sec + nsec * 1e-9, reader.string()};
+}
+
+struct Quaternion {
+  double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
+};
+Quaternion read_quaternion(WireReader& reader) {
+  Quaternion q;
+  q.x = reader.f64();
+  q.y = reader.f64();
+  q.z = reader.f64();
+  q.w = reader.f64();
+  return q;
+}
+
+constexpr std::size_t kVector3Bytes = 3 * 8;
+constexpr std::size_t kCovariance3Bytes = 9 * 8;   // float64[9]
+constexpr std::size_t kCovariance6Bytes = 36 * 8;  // float64[36]
+
+std::vector<double> read_float32_array(WireReader& reader) {
+  const std::size_t n = reader.count(4);
+  std::vector<double> values(n);
+  for (double& value : values) value = reader.f32();
+  return values;
+}
+
+// sensor_msgs/LaserScan.
+DecodedScan read_laser_scan(WireReader& reader) {
+  DecodedScan out;
+  Header header = read_header(reader);
+  out.frame_id = std::move(header.frame_id);
+  LaserScan& scan = out.scan;
+  scan.stamp = header.stamp;
+  scan.angle_min = reader.f32();
+  reader.skip(4);  // angle_max: angle_min + (n - 1) angle_increment
+  scan.angle_increment = reader.f32();
+  reader.skip(8);  // time_increment, scan_time
+  scan.range_min = reader.f32();
+  scan.range_max = reader.f32();
+  scan.ranges = read_float32_array(reader);
+  scan.intensities = read_float32_array(reader);
+  return out;
+}
+
+// nav_msgs/Odometry: header, child_frame_id, PoseWithCovariance, TwistWithCovariance.
+DecodedOdometry read_odometry(WireReader& reader) {
+  DecodedOdometry out;
+  Header header = read_header(reader);
+  out.frame_id = std::move(header.frame_id);
+  out.child_frame_id = reader.string();
+  OdometryReading& reading = out.reading;
+  reading.stamp = header.stamp;
+  const double x = reader.f64();
+  const double y = reader.f64();
+  reader.skip(8);  // z
+  const Quaternion q = read_quaternion(reader);
+  reader.skip(kCovariance6Bytes);
+  reading.pose = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+  reading.tv = reader.f64();  // twist.linear.x
+  reader.skip(2 * 8 + 2 * 8);  // linear y z, angular x y
+  reading.rv = reader.f64();   // twist.angular.z
+  reader.skip(kCovariance6Bytes);
+  return out;
+}
+
+// tf2_msgs/TFMessage: geometry_msgs/TransformStamped[].
+DecodedTransforms read_transforms(WireReader& reader, bool is_static) {
+  // The smallest TransformStamped: seq, stamp, two empty strings, translation, rotation.
+  constexpr std::size_t kMinTransformBytes = 4 + 8 + 4 + 4 + kVector3Bytes + 4 * 8;
+  DecodedTransforms out;
+  out.is_static = is_static;
+  const std::size_t n = reader.count(kMinTransformBytes);
+  out.transforms.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    DecodedTransform& transform = out.transforms.emplace_back();
+    Header header = read_header(reader);
+    transform.stamp = header.stamp;
+    transform.parent = std::move(header.frame_id);
+    transform.child = reader.string();
+    const double x = reader.f64();
+    const double y = reader.f64();
+    reader.skip(8);  // z
+    const Quaternion q = read_quaternion(reader);
+    transform.T_parent_child = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+  }
+  return out;
+}
+
+// sensor_msgs/Imu: header, orientation + covariance, angular_velocity + covariance,
+// linear_acceleration + covariance.
+DecodedImu read_imu(WireReader& reader) {
+  DecodedImu out;
+  Header header = read_header(reader);
+  out.stamp = header.stamp;
+  out.frame_id = std::move(header.frame_id);
+  const Quaternion q = read_quaternion(reader);
+  out.roll = std::atan2(2.0 * (q.w * q.x + q.y * q.z), 1.0 - 2.0 * (q.x * q.x + q.y * q.y));
+  out.pitch = std::asin(std::clamp(2.0 * (q.w * q.y - q.z * q.x), -1.0, 1.0));
+  reader.skip(kCovariance3Bytes);
+  reader.skip(2 * 8);  // angular_velocity x y
+  out.yaw_rate = reader.f64();
+  reader.skip(kCovariance3Bytes);
+  reader.skip(kVector3Bytes + kCovariance3Bytes);  // linear_acceleration
+  return out;
+}
+
+}  // namespace
+
+std::optional<MessageType> message_type(std::string_view name) {
+  for (const TypeInfo& info : kTypes) {
+    if (info.name == name) return info.type;
+  }
+  return std::nullopt;
+}
+
+std::string_view md5sum(MessageType type) { return kTypes[static_cast<std::size_t>(type)].md5sum; }
+
+double quaternion_yaw(double x, double y, double z, double w) {
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+}
+
+DecodedMessage decode_message(MessageType type, Bytes data, bool is_static) {
+  WireReader reader(data);
+  DecodedMessage message = [&]() -> DecodedMessage {
+    switch (type) {
+      case MessageType::kLaserScan: return read_laser_scan(reader);
+      case MessageType::kOdometry: return read_odometry(reader);
+      case MessageType::kTFMessage: return read_transforms(reader, is_static);
+      case MessageType::kImu: return read_imu(reader);
+    }
+    throw Error("unknown message type");
+  }();
+  if (reader.remaining() != 0) {
+    throw Error(std::to_string(reader.remaining()) + " bytes left over after a " +
+                std::string(kTypes[static_cast<std::size_t>(type)].name) + " of " + std::to_string(data.size()) +
+                " bytes");
+  }
+  return message;
+}
+
+}  // namespace slam2d::ros1

@@ -1,0 +1,27 @@
+#pragma once
+// ROS 1 serialization (http://wiki.ros.org/msg, little-endian; strings and arrays carry a uint32
+// length; time is uint32 sec + uint32 nsec) of the four message types slam2d reads.
+
+#include <optional>
+#include <string_view>
+
+#include "slam2d/io/bag_source.hpp"
+#include "slam2d/io/detail/ros1_wire.hpp"
+
+namespace slam2d::ros1 {
+
+enum class MessageType { kLaserScan, kOdometry, kTFMessage, kImu };
+
+/// The type slam2d decodes under a ROS 1 type name ("sensor_msgs/LaserScan"), or nullopt.
+std::optional<MessageType> message_type(std::string_view name);
+/// The md5sum of the message definition slam2d decodes, as bags record it.
+std::string_view md5sum(MessageType type);
+
+/// One serialized message, decoded; every byte must be used. `is_static` marks a TFMessage read
+/// from /tf_static. Throws Error for data too short or too long for the type.
+DecodedMessage decode_message(MessageType type, Bytes data, bool is_static);
+
+/// Yaw of the quaternion (x, y, z, w), rad: rotation about z of its z-y-x Euler angles.
+double quaternion_yaw(double x, double y, double z, double w);
+
+}  // namespace slam2d::ros1

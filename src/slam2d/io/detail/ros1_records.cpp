@@ -1,0 +1,145 @@
+#include "slam2d/io/detail/ros1_records.hpp"
+
+#include <bzlib.h>
+#include <lz4frame.h>
+
+#include <memory>
+
+namespace slam2d::ros1 {
+
+void throw_overrun(std::size_t wanted, std::size_t position, std::size_t size) {
+  throw Error("needs " + std::to_string(wanted) + " bytes at byte " + std::to_string(position) + " of " +
+              std::to_string(size) + " (truncated, or a length runs past its record)");
+}
+
+Time read_time(WireReader& reader) {
+  Time time;
+  time.sec = reader.u32();
+  time.nsec = reader.u32();
+  return time;
+}
+
+HeaderFields::HeaderFields(Bytes bytes) {
+  WireReader reader(bytes);
+  while (reader.remaining() > 0) {
+    const Bytes field = reader.bytes(reader.u32());
+    const std::string_view text(reinterpret_cast<const char*>(field.data()), field.size());
+    const std::size_t equals = text.find('=');
+    check(equals != std::string_view::npos, "a header field without '='");
+    fields_.emplace_back(text.substr(0, equals), field.subspan(equals + 1));
+  }
+}
+
+std::optional<Bytes> HeaderFields::find(std::string_view name) const {
+  for (const auto& [key, value] : fields_) {
+    if (key == name) return value;
+  }
+  return std::nullopt;
+}
+
+Bytes HeaderFields::get(std::string_view name) const {
+  const std::optional<Bytes> value = find(name);
+  if (!value) throw Error("a record header without its field '" + std::string(name) + "'");
+  return *value;
+}
+
+namespace {
+WireReader fixed_field(const HeaderFields& fields, std::string_view name, std::size_t size) {
+  const Bytes value = fields.get(name);
+  if (value.size() != size) {
+    throw Error("header field '" + std::string(name) + "' has " + std::to_string(value.size()) + " bytes, not " +
+                std::to_string(size));
+  }
+  return WireReader(value);
+}
+}  // namespace
+
+Op HeaderFields::op() const { return static_cast<Op>(fixed_field(*this, "op", 1).bytes(1)[0]); }
+std::uint32_t HeaderFields::u32(std::string_view name) const { return fixed_field(*this, name, 4).u32(); }
+std::uint64_t HeaderFields::u64(std::string_view name) const { return fixed_field(*this, name, 8).u64(); }
+Time HeaderFields::time(std::string_view name) const {
+  WireReader reader = fixed_field(*this, name, 8);
+  return read_time(reader);
+}
+std::string HeaderFields::text(std::string_view name) const {
+  const Bytes value = get(name);
+  return {reinterpret_cast<const char*>(value.data()), value.size()};
+}
+
+RecordLayout record_layout(std::uint64_t pos, std::uint64_t size, std::uint32_t header_len, std::uint32_t data_len) {
+  RecordLayout layout;
+  layout.header_pos = pos + 4;
+  layout.header_len = header_len;
+  layout.data_pos = layout.header_pos + header_len + 4;
+  layout.data_len = data_len;
+  if (layout.end() > size) {
+    throw Error("record at byte " + std::to_string(pos) + " (header " + std::to_string(header_len) + " bytes, data " +
+                std::to_string(data_len) + ") runs past the end at byte " + std::to_string(size) + " (truncated?)");
+  }
+  return layout;
+}
+
+namespace {
+
+std::vector<std::uint8_t> decompress_bz2(Bytes data, std::uint64_t size) {
+  std::vector<std::uint8_t> out(size);
+  unsigned int out_size = static_cast<unsigned int>(size);
+  // bzlib's API takes a non-const source it does not write to.
+  char* source = const_cast<char*>(reinterpret_cast<const char*>(data.data()));
+  const int status = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size, source,
+                                                static_cast<unsigned int>(data.size()), 0, 0);
+  if (status == BZ_OUTBUFF_FULL) throw Error("bz2 chunk larger than its header's size " + std::to_string(size));
+  if (status != BZ_OK) throw Error("corrupt bz2 chunk (bzlib error " + std::to_string(status) + ")");
+  if (out_size != size) {
+    throw Error("bz2 chunk holds " + std::to_string(out_size) + " bytes, its header says " + std::to_string(size));
+  }
+  return out;
+}
+
+// roslz4 writes one LZ4 frame per chunk; concatenated frames are accepted too.
+std::vector<std::uint8_t> decompress_lz4(Bytes data, std::uint64_t size) {
+  LZ4F_dctx* raw = nullptr;
+  if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) throw Error("cannot create an lz4 context");
+  const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(raw, LZ4F_freeDecompressionContext);
+  std::vector<std::uint8_t> out(size);
+  std::size_t in_pos = 0;
+  std::size_t out_pos = 0;
+  std::size_t hint = 1;
+  while (in_pos < data.size()) {
+    std::size_t in_size = data.size() - in_pos;
+    std::size_t out_size = out.size() - out_pos;
+    hint = LZ4F_decompress(context.get(), out.data() + out_pos, &out_size, data.data() + in_pos, &in_size, nullptr);
+    if (LZ4F_isError(hint)) throw Error(std::string("corrupt lz4 chunk (") + LZ4F_getErrorName(hint) + ")");
+    in_pos += in_size;
+    out_pos += out_size;
+    if (in_size == 0 && out_size == 0) break;  // output full, input left: larger than its header says
+  }
+  if (in_pos < data.size()) throw Error("lz4 chunk larger than its header's size " + std::to_string(size));
+  if (hint != 0) throw Error("lz4 chunk ends inside its frame (truncated)");
+  if (out_pos != size) {
+    throw Error("lz4 chunk holds " + std::to_string(out_pos) + " bytes, its header says " + std::to_string(size));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> decompress_chunk(std::string_view compression, Bytes data, std::uint64_t size) {
+  if (compression == "none") {
+    if (data.size() != size) {
+      throw Error("uncompressed chunk of " + std::to_string(data.size()) + " bytes, its header says " +
+                  std::to_string(size));
+    }
+    return {data.begin(), data.end()};
+  }
+  if (compression != "bz2" && compression != "lz4") {
+    throw Error("unknown chunk compression '" + std::string(compression) + "' (slam2d reads none, bz2 and lz4)");
+  }
+  if (size > kMaxChunkSize || size > kMaxCompressionRatio * data.size()) {
+    throw Error("implausible uncompressed chunk size " + std::to_string(size) + " for " + std::to_string(data.size()) +
+                " compressed bytes");
+  }
+  return compression == "bz2" ? decompress_bz2(data, size) : decompress_lz4(data, size);
+}
+
+}  // namespace slam2d::ros1

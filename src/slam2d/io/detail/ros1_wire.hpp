@@ -1,0 +1,67 @@
+#pragma once
+// Little-endian reads over a byte span, each one checked against the bytes left: the one reader
+// for ROS 1 record headers, index data and serialized messages.
+
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "slam2d/core/error.hpp"
+
+namespace slam2d::ros1 {
+
+using Bytes = std::span<const std::uint8_t>;
+
+/// Throws Error("needs N bytes at byte P of M"): a length that runs past its record.
+[[noreturn]] void throw_overrun(std::size_t wanted, std::size_t position, std::size_t size);
+
+class WireReader {
+ public:
+  explicit WireReader(Bytes bytes) : bytes_(bytes) {}
+
+  std::size_t position() const { return position_; }
+  std::size_t remaining() const { return bytes_.size() - position_; }
+
+  Bytes bytes(std::size_t n) {
+    need(n);
+    const Bytes out = bytes_.subspan(position_, n);
+    position_ += n;
+    return out;
+  }
+  void skip(std::size_t n) { bytes(n); }
+  std::uint32_t u32() {
+    const Bytes b = bytes(4);
+    return static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
+           static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+  }
+  std::uint64_t u64() {
+    const std::uint64_t low = u32();
+    return low | static_cast<std::uint64_t>(u32()) << 32;
+  }
+  float f32() { return std::bit_cast<float>(u32()); }
+  double f64() { return std::bit_cast<double>(u64()); }
+  /// ROS 1 string: uint32 length, then the bytes.
+  std::string string() {
+    const Bytes b = bytes(u32());
+    return {reinterpret_cast<const char*>(b.data()), b.size()};
+  }
+  /// ROS 1 array length: uint32 count, checked against the bytes left for elements of at least
+  /// `min_element_size` bytes, so that nothing is allocated for a count the data cannot hold.
+  std::size_t count(std::size_t min_element_size) {
+    const std::size_t n = u32();
+    if (min_element_size > 0 && n > remaining() / min_element_size) throw_overrun(n * min_element_size, position_, bytes_.size());
+    return n;
+  }
+
+ private:
+  void need(std::size_t n) const {
+    if (n > remaining()) throw_overrun(n, position_, bytes_.size());
+  }
+
+  Bytes bytes_;
+  std::size_t position_ = 0;
+};
+
+}  // namespace slam2d::ros1

@@ -1,0 +1,334 @@
+#include "slam2d/io/ros1_bag.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "slam2d/io/detail/ros1_messages.hpp"
+#include "slam2d/io/detail/ros1_records.hpp"
+
+namespace slam2d {
+
+namespace {
+
+using ros1::Bytes;
+using ros1::HeaderFields;
+using ros1::Op;
+using ros1::RecordLayout;
+using ros1::WireReader;
+
+/// Random access to the bag file; every read is checked against the file size.
+class BagFile {
+ public:
+  explicit BagFile(const std::string& path) : stream_(path, std::ios::binary) {
+    check(stream_.is_open(), "cannot open the file");
+    stream_.seekg(0, std::ios::end);
+    size_ = static_cast<std::uint64_t>(stream_.tellg());
+  }
+  std::uint64_t size() const { return size_; }
+
+  std::vector<std::uint8_t> read(std::uint64_t pos, std::uint64_t n) {
+    if (pos > size_ || n > size_ - pos) {
+      throw Error("needs " + std::to_string(n) + " bytes at byte " + std::to_string(pos) + " of a " +
+                  std::to_string(size_) + "-byte file (truncated?)");
+    }
+    std::vector<std::uint8_t> bytes(n);
+    stream_.seekg(static_cast<std::streamoff>(pos));
+    stream_.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(n));
+    check(static_cast<std::uint64_t>(stream_.gcount()) == n, "read error");
+    return bytes;
+  }
+
+  /// The layout of the record at `pos`, and its header bytes.
+  std::pair<RecordLayout, std::vector<std::uint8_t>> record(std::uint64_t pos) {
+    const std::uint32_t header_len = WireReader(read(pos, 4)).u32();
+    const std::vector<std::uint8_t> after_header = read(pos + 4 + header_len, 4);
+    const RecordLayout layout = ros1::record_layout(pos, size_, header_len, WireReader(after_header).u32());
+    return {layout, read(layout.header_pos, layout.header_len)};
+  }
+
+ private:
+  std::ifstream stream_;
+  std::uint64_t size_ = 0;
+};
+
+struct Connection {
+  std::uint32_t id = 0;
+  std::string topic;
+  std::string type;
+  std::string md5sum;
+};
+
+struct Chunk {
+  std::uint64_t pos = 0;  // of the chunk record
+  std::string compression;
+  std::uint64_t size = 0;  // uncompressed
+  RecordLayout layout;
+};
+
+/// One message, from a chunk's index data.
+struct IndexEntry {
+  std::uint64_t time_ns = 0;
+  ros1::Time time;
+  std::uint32_t chunk = 0;       // in chunks_, which are in file order
+  std::uint32_t offset = 0;      // of its message data record in the uncompressed chunk
+  std::uint32_t connection = 0;  // in connections_
+};
+
+class Ros1Bag final : public BagSource {
+ public:
+  explicit Ros1Bag(std::string path) : path_(std::move(path)), file_(path_) {
+    read_index();
+    list_topics();
+  }
+
+  const std::string& path() const override { return path_; }
+  const std::vector<BagTopic>& topics() const override { return topics_; }
+  double progress() const override {
+    return queue_.empty() ? (started_ ? 1.0 : 0.0) : static_cast<double>(next_) / static_cast<double>(queue_.size());
+  }
+
+  std::optional<DecodedRecord> next(const std::vector<std::string>& wanted) override {
+    try {
+      if (!started_ || wanted != wanted_) plan(wanted);
+      if (next_ == queue_.size()) return std::nullopt;
+      const std::size_t file_index = queue_[next_];
+      DecodedRecord record = read_message(file_index);
+      last_yielded_ = file_index;
+      if (++next_ == last_use_[entries_[file_index].chunk]) chunk_data_.erase(entries_[file_index].chunk);
+      return record;
+    } catch (const Error& e) {
+      throw Error(path_ + ": " + e.what());
+    }
+  }
+
+ private:
+  // Bag header -> index position -> connections and chunk infos -> each chunk's index data.
+  void read_index() {
+    const std::vector<std::uint8_t> magic = file_.read(0, ros1::kMagic.size());
+    check(std::equal(magic.begin(), magic.end(), ros1::kMagic.begin()), "not a ROS 1 bag v2.0 (no '#ROSBAG V2.0' magic)");
+    const auto [header_layout, header_bytes] = file_.record(ros1::kMagic.size());
+    const HeaderFields bag_header(header_bytes);
+    check(bag_header.op() == Op::kBagHeader, "the first record is not a bag header");
+    const std::uint64_t index_pos = bag_header.u64("index_pos");
+    const std::uint32_t connection_count = bag_header.u32("conn_count");
+    const std::uint32_t chunk_count = bag_header.u32("chunk_count");
+    if (index_pos == 0) {
+      throw Error("no index: the bag was not closed properly (reindex it with rosbag reindex)");
+    }
+    check(index_pos >= header_layout.end() && index_pos < file_.size(),
+          "index position " + std::to_string(index_pos) + " outside the file (truncated? rosbag reindex repairs it)");
+
+    std::vector<std::uint64_t> chunk_positions;
+    for (std::uint64_t pos = index_pos; pos < file_.size();) {
+      const auto [layout, bytes] = file_.record(pos);
+      const HeaderFields fields(bytes);
+      if (fields.op() == Op::kConnection) {
+        read_connection(fields, layout);
+      } else if (fields.op() == Op::kChunkInfo) {
+        check(fields.u32("ver") == 1, "chunk info version " + std::to_string(fields.u32("ver")) + " (not 1)");
+        chunk_positions.push_back(fields.u64("chunk_pos"));
+      }
+      pos = layout.end();
+    }
+    check(connections_.size() == connection_count && chunk_positions.size() == chunk_count,
+          "the index holds " + std::to_string(connections_.size()) + " connections and " +
+              std::to_string(chunk_positions.size()) + " chunk infos, the bag header says " +
+              std::to_string(connection_count) + " and " + std::to_string(chunk_count));
+    std::ranges::sort(chunk_positions);
+    for (const std::uint64_t pos : chunk_positions) read_chunk_index(pos, index_pos);
+    // File order: by chunk, then by offset in the chunk; a message's position is its index.
+    std::ranges::sort(entries_, {}, [](const IndexEntry& e) { return std::pair(e.chunk, e.offset); });
+  }
+
+  void read_connection(const HeaderFields& fields, const RecordLayout& layout) {
+    const std::uint32_t id = fields.u32("conn");
+    check(!connection_index_.contains(id), "connection " + std::to_string(id) + " defined twice");
+    const std::vector<std::uint8_t> data = file_.read(layout.data_pos, layout.data_len);
+    const HeaderFields connection_header(data);
+    Connection& connection = connections_.emplace_back();
+    connection.id = id;
+    connection.topic = fields.text("topic");
+    connection.type = connection_header.text("type");
+    if (connection_header.find("md5sum")) connection.md5sum = connection_header.text("md5sum");
+    connection_index_[id] = static_cast<std::uint32_t>(connections_.size() - 1);
+  }
+
+  // A chunk record, then one index data record per connection in it.
+  void read_chunk_index(std::uint64_t chunk_pos, std::uint64_t index_pos) {
+    const std::string where = "chunk at byte " + std::to_string(chunk_pos) + ": ";
+    try {
+      const auto [layout, bytes] = file_.record(chunk_pos);
+      const HeaderFields fields(bytes);
+      check(fields.op() == Op::kChunk, "not a chunk record");
+      Chunk& chunk = chunks_.emplace_back();
+      chunk.pos = chunk_pos;
+      chunk.compression = fields.text("compression");
+      chunk.size = fields.u32("size");
+      chunk.layout = layout;
+      const auto chunk_number = static_cast<std::uint32_t>(chunks_.size() - 1);
+      for (std::uint64_t pos = layout.end(); pos < index_pos;) {
+        const auto [index_layout, index_bytes] = file_.record(pos);
+        const HeaderFields index(index_bytes);
+        if (index.op() != Op::kIndexData) break;
+        read_index_data(index, index_layout, chunk_number);
+        pos = index_layout.end();
+      }
+    } catch (const Error& e) {
+      throw Error(where + e.what());
+    }
+  }
+
+  // Index data v1: uint32 count entries of (time, uint32 offset).
+  void read_index_data(const HeaderFields& fields, const RecordLayout& layout, std::uint32_t chunk) {
+    check(fields.u32("ver") == 1, "index data version " + std::to_string(fields.u32("ver")) + " (not 1)");
+    const std::uint32_t id = fields.u32("conn");
+    const auto found = connection_index_.find(id);
+    check(found != connection_index_.end(), "index data for unknown connection " + std::to_string(id));
+    const std::uint64_t count = fields.u32("count");
+    check(count * 12 == layout.data_len, "index data of " + std::to_string(layout.data_len) + " bytes for " +
+                                             std::to_string(count) + " messages");
+    const std::vector<std::uint8_t> data = file_.read(layout.data_pos, layout.data_len);
+    WireReader reader(data);
+    for (std::uint64_t i = 0; i < count; ++i) {
+      IndexEntry& entry = entries_.emplace_back();
+      entry.time = ros1::read_time(reader);
+      entry.time_ns = entry.time.nanoseconds();
+      entry.chunk = chunk;
+      entry.offset = reader.u32();
+      entry.connection = found->second;
+      check(entry.offset < chunks_[chunk].size, "message offset " + std::to_string(entry.offset) +
+                                                    " past the chunk's " + std::to_string(chunks_[chunk].size) +
+                                                    " bytes");
+    }
+  }
+
+  // Per topic name, over its connections: type, count, first and last receive time.
+  void list_topics() {
+    std::map<std::string, std::size_t> topic_index;
+    for (const Connection& connection : connections_) {
+      if (topic_index.emplace(connection.topic, topics_.size()).second) {
+        topics_.push_back({.name = connection.topic, .type = connection.type});
+      }
+    }
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> span(topics_.size(), {UINT64_MAX, 0});
+    for (const IndexEntry& entry : entries_) {
+      const std::size_t t = topic_index.at(connections_[entry.connection].topic);
+      ++topics_[t].count;
+      span[t] = {std::min(span[t].first, entry.time_ns), std::max(span[t].second, entry.time_ns)};
+    }
+    for (const IndexEntry& entry : entries_) {  // the seconds of the extreme times, as read
+      BagTopic& topic = topics_[topic_index.at(connections_[entry.connection].topic)];
+      const auto& [first, last] = span[static_cast<std::size_t>(&topic - topics_.data())];
+      if (entry.time_ns == first) topic.first_stamp = entry.time.seconds();
+      if (entry.time_ns == last) topic.last_stamp = entry.time.seconds();
+    }
+  }
+
+  // The messages of `wanted` in time order (ties in file order), after the last one yielded
+  // when the wanted topics change on the way; which chunk is needed until when.
+  void plan(const std::vector<std::string>& wanted) {
+    const std::set<std::string> names(wanted.begin(), wanted.end());
+    std::vector<std::optional<ros1::MessageType>> types(connections_.size());
+    for (std::size_t c = 0; c < connections_.size(); ++c) {
+      const Connection& connection = connections_[c];
+      if (!names.contains(connection.topic)) continue;
+      types[c] = ros1::message_type(connection.type);
+      check(types[c].has_value(), "topic " + connection.topic + " has type " + connection.type +
+                                      ", which slam2d does not decode (it reads sensor_msgs/LaserScan, "
+                                      "nav_msgs/Odometry, tf2_msgs/TFMessage and sensor_msgs/Imu)");
+      check(connection.md5sum.empty() || connection.md5sum == "*" || connection.md5sum == ros1::md5sum(*types[c]),
+            "topic " + connection.topic + " has a " + connection.type + " of another definition (md5sum " +
+                connection.md5sum + ", slam2d reads " + std::string(ros1::md5sum(*types[c])) + ")");
+    }
+    types_ = std::move(types);
+    queue_.clear();
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (types_[entries_[i].connection] && (!last_yielded_ || comes_after(i, *last_yielded_))) queue_.push_back(i);
+    }
+    std::ranges::stable_sort(queue_, {}, [this](std::size_t i) { return entries_[i].time_ns; });
+    last_use_.assign(chunks_.size(), 0);
+    for (std::size_t q = 0; q < queue_.size(); ++q) last_use_[entries_[queue_[q]].chunk] = q + 1;
+    chunk_data_.clear();
+    next_ = 0;
+    wanted_ = wanted;
+    started_ = true;
+  }
+
+  bool comes_after(std::size_t a, std::size_t b) const {
+    return std::pair(entries_[a].time_ns, a) > std::pair(entries_[b].time_ns, b);
+  }
+
+  const std::vector<std::uint8_t>& chunk_data(std::uint32_t chunk_number) {
+    const auto found = chunk_data_.find(chunk_number);
+    if (found != chunk_data_.end()) return found->second;
+    const Chunk& chunk = chunks_[chunk_number];
+    try {
+      const std::vector<std::uint8_t> compressed = file_.read(chunk.layout.data_pos, chunk.layout.data_len);
+      return chunk_data_[chunk_number] = ros1::decompress_chunk(chunk.compression, compressed, chunk.size);
+    } catch (const Error& e) {
+      throw Error("chunk at byte " + std::to_string(chunk.pos) + ": " + e.what());
+    }
+  }
+
+  DecodedRecord read_message(std::size_t file_index) {
+    const IndexEntry& entry = entries_[file_index];
+    const Connection& connection = connections_[entry.connection];
+    const std::vector<std::uint8_t>& chunk = chunk_data(entry.chunk);
+    try {
+      WireReader reader(Bytes(chunk).subspan(entry.offset));
+      const HeaderFields fields(reader.bytes(reader.u32()));
+      check(fields.op() == Op::kMessageData, "no message data record at the index's offset");
+      check(fields.u32("conn") == connection.id, "the message's connection differs from its index's");
+      const Bytes data = reader.bytes(reader.u32());
+      return {.topic = connection.topic,
+              .receive_time = entry.time.seconds(),
+              .index = file_index,
+              .message = ros1::decode_message(*types_[entry.connection], data, connection.topic == "/tf_static")};
+    } catch (const Error& e) {
+      throw Error(connection.topic + " message (record " + std::to_string(file_index) + ", time " +
+                  std::to_string(entry.time.sec) + "." + std::to_string(entry.time.nsec) + ", chunk at byte " +
+                  std::to_string(chunks_[entry.chunk].pos) + " offset " + std::to_string(entry.offset) +
+                  "): " + e.what());
+    }
+  }
+
+  std::string path_;
+  BagFile file_;
+  std::vector<Connection> connections_;
+  std::map<std::uint32_t, std::uint32_t> connection_index_;  // connection id -> connections_
+  std::vector<Chunk> chunks_;
+  std::vector<IndexEntry> entries_;  // every message, in file order
+  std::vector<BagTopic> topics_;
+
+  // The current read.
+  bool started_ = false;
+  std::vector<std::string> wanted_;
+  std::vector<std::optional<ros1::MessageType>> types_;  // per connection, when wanted
+  std::vector<std::size_t> queue_;                        // entries_ indices, in time order
+  std::size_t next_ = 0;
+  std::optional<std::size_t> last_yielded_;
+  std::vector<std::size_t> last_use_;  // per chunk: 1 + the queue position of its last message
+  std::map<std::uint32_t, std::vector<std::uint8_t>> chunk_data_;  // decompressed, while needed
+};
+
+}  // namespace
+
+bool is_ros1_bag(const std::string& path) {
+  std::ifstream stream(path, std::ios::binary);
+  std::string magic(ros1::kMagic.size(), '\0');
+  return stream.read(magic.data(), static_cast<std::streamsize>(magic.size())) && magic == ros1::kMagic;
+}
+
+std::unique_ptr<BagSource> open_ros1_bag(const std::string& path) {
+  try {
+    return std::make_unique<Ros1Bag>(path);
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
+}
+
+}  // namespace slam2d

@@ -1,0 +1,24 @@
+#pragma once
+// ROS 1 bags (format v2.0, http://wiki.ros.org/Bags/Format/2.0): uncompressed, bz2 and lz4 chunks,
+// read through the bag's index. Decodes sensor_msgs/LaserScan, nav_msgs/Odometry,
+// tf2_msgs/TFMessage and sensor_msgs/Imu into the structs of bag_source.hpp.
+
+#include <memory>
+#include <string>
+
+#include "slam2d/io/bag_source.hpp"
+
+namespace slam2d {
+
+/// True when the file starts with the ROS 1 bag v2.0 magic "#ROSBAG V2.0\n" (false when it cannot
+/// be read).
+bool is_ros1_bag(const std::string& path);
+
+/// Opens a ROS 1 bag and reads its index (connections, chunk infos, each chunk's index data).
+/// Messages come out in receive-time (record time) order, ties in file order; each chunk is
+/// decompressed once, when first needed, and dropped after its last wanted message.
+/// Throws Error("PATH: ...") for a file that is not a v2.0 bag, has no index (a bag left unclosed:
+/// `rosbag reindex` repairs it), or whose records are inconsistent.
+std::unique_ptr<BagSource> open_ros1_bag(const std::string& path);
+
+}  // namespace slam2d
