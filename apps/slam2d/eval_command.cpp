@@ -28,7 +28,7 @@ struct EvalOptions {
 void run_eval(const EvalOptions& options) {
   check(!options.relations.empty() || !options.reference.empty(), "eval: give --relations FILE or --reference TRAJ");
   check(options.stamp_tolerance >= 0.0, "eval: --stamp-tolerance must not be negative");
-  const Trajectory estimate = read_trajectory(options.trajectory);
+  const Trajectory estimate = read_any_trajectory(options.trajectory);
   JsonObject json;
   json.add("trajectory", options.trajectory).add("poses", estimate.size());
   if (!options.relations.empty()) {
@@ -36,7 +36,7 @@ void run_eval(const EvalOptions& options) {
     add_relation_error(json, estimate, read_relations(options.relations), options.stamp_tolerance);
   } else {
     json.add("reference", options.reference);
-    add_reference_error(json, estimate, read_trajectory(options.reference), options.stamp_tolerance,
+    add_reference_error(json, estimate, read_any_trajectory(options.reference), options.stamp_tolerance,
                         options.rpe_delta);
   }
   std::fputs(options.json ? json.dump().c_str() : json.text().c_str(), stdout);

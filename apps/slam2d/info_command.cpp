@@ -19,6 +19,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
 
@@ -28,7 +29,7 @@ namespace {
 
 struct InfoOptions {
   std::string path;
-  CarmenReaderOptions geometry;  // FLASER/RLASER geometry overrides (sensor_options.hpp)
+  LogReaderOptions input;  // CARMEN geometry overrides, bag topics and frames (sensor_options.hpp)
   bool json = false;
   bool quiet = false;
 };
@@ -82,7 +83,7 @@ JsonObject geometries_json(const std::vector<OldLaserGeometry>& geometries) {
 }
 
 JsonObject log_info(const InfoOptions& options) {
-  CarmenReader reader(options.path, options.geometry);
+  CarmenReader reader(options.path, options.input.carmen);
   Progress progress("info", options.quiet);
   std::map<std::size_t, std::size_t> beam_counts;  // beams -> scans
   std::map<std::string, std::size_t> laser_types;
@@ -128,6 +129,63 @@ JsonObject log_info(const InfoOptions& options) {
   return json;
 }
 
+// A bag: its topics (type, count, rate), what the assembly uses (topics, frames, the laser's
+// mounting) and the scans it gives.
+JsonObject bag_info(const InfoOptions& options) {
+  LogReader reader(options.path, options.input);
+  Progress progress("info", options.quiet);
+  std::map<std::size_t, std::size_t> beam_counts;  // beams -> scans
+  std::size_t scans = 0, odometry = 0, without_pose = 0;
+  double fov = 0.0;
+  std::optional<double> first_scan, last_scan;
+  while (auto message = reader.next()) {
+    if (const auto* laser = std::get_if<LaserMessage>(&*message)) {
+      ++scans;
+      ++beam_counts[laser->scan.size()];
+      fov = std::max(fov, laser->field_of_view);
+      if (!laser->has_poses) ++without_pose;
+      if (!first_scan) first_scan = laser->scan.stamp;
+      last_scan = laser->scan.stamp;
+      if (scans % 1024 == 0) progress.update(reader.progress(), fmt::format("{} scans", scans));
+    } else if (std::holds_alternative<OdometryMessage>(*message)) {
+      ++odometry;
+    }
+  }
+  progress.finish();
+  const BagLogReader& bag = *reader.bag();
+  const BagChoice& choice = bag.choice();
+  JsonObject json;
+  json.add("file", options.path).add("kind", "bag").add("format", log_format_name(reader.format()));
+  JsonObject topics;
+  for (const BagTopic& topic : bag.topics()) {
+    const double span = topic.last_stamp - topic.first_stamp;
+    JsonObject entry;
+    entry.add("type", topic.type).add("count", topic.count);
+    entry.add("rate_hz", topic.count > 1 && span > 0.0 ? std::optional<double>((topic.count - 1) / span) : std::nullopt);
+    topics.add(topic.name, entry);
+  }
+  json.add("topics", topics);
+  JsonObject uses;
+  uses.add("scan_topic", choice.scan_topic).add("odom_topic", choice.odom_topic).add("imu_topic", choice.imu_topic);
+  uses.add("base_frame", choice.base_frame).add("odom_frame", choice.odom_frame).add("laser_frame", choice.laser_frame);
+  if (choice.T_base_laser) {
+    uses.add("laser_x", choice.T_base_laser->x()).add("laser_y", choice.T_base_laser->y());
+    uses.add("laser_yaw_deg", rad_to_deg(choice.T_base_laser->theta()));
+  } else {
+    uses.add_null("laser_x");
+  }
+  json.add("uses", uses);
+  const double duration = scans > 0 ? *last_scan - *first_scan : 0.0;
+  const auto most_common = std::max_element(beam_counts.begin(), beam_counts.end(),
+                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+  json.add("scans", scans).add("beams", beam_counts.empty() ? std::size_t{0} : most_common->first);
+  json.add("fov_deg", rad_to_deg(fov)).add("duration_s", duration);
+  json.add("rate_hz", duration > 0.0 ? std::optional<double>((scans - 1) / duration) : std::nullopt);
+  json.add("odom_messages", odometry).add("scans_without_odometry", without_pose);
+  json.add("warnings", bag.warnings());
+  return json;
+}
+
 JsonObject map_info(const InfoOptions& options) {
   const MapMetadata metadata = read_map_metadata(options.path);
   const OccupancyMap map = read_map(options.path);
@@ -158,7 +216,9 @@ JsonObject graph_info(const InfoOptions& options) {
 
 void run_info(const InfoOptions& options) {
   JsonObject json;
-  if (ends_with_any(options.path, {".yaml", ".yml"})) {
+  if (detect_log_format(options.path) != LogFormat::kCarmen) {
+    json = bag_info(options);
+  } else if (ends_with_any(options.path, {".yaml", ".yml"})) {
     json = map_info(options);
   } else if (ends_with_any(options.path, {".g2o", ".g2o.gz", ".graph", ".graph.gz", ".toro"})) {
     json = graph_info(options);
@@ -172,9 +232,9 @@ void run_info(const InfoOptions& options) {
 
 void add_info_command(CLI::App& app) {
   auto options = std::make_shared<InfoOptions>();
-  CLI::App* command = app.add_subcommand("info", "Summarise a CARMEN log, a map (.yaml) or a pose graph (.g2o, .graph)");
-  command->add_option("file", options->path, "CARMEN log (plain or .gz), map YAML, or g2o/TORO graph")->required();
-  add_sensor_options(command, options->geometry);
+  CLI::App* command = app.add_subcommand("info", "Summarise a log (CARMEN, ROS 1 bag, MCAP, rosbag2 folder), a map (.yaml) or a pose graph (.g2o, .graph)");
+  command->add_option("file", options->path, "CARMEN log (plain or .gz), ROS 1 bag, MCAP file, rosbag2 folder, map YAML, or g2o/TORO graph")->required();
+  add_sensor_options(command, options->input);
   command->add_flag("--json", options->json, "Print a JSON summary");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_info(*options); });

@@ -47,8 +47,9 @@ struct LocalizeOptions {
   std::optional<double> kidnap_at;
   std::string kidnap_by = "5,0,90";
   std::optional<std::string> sensor;
-  CarmenReaderOptions geometry;  // FLASER geometry overrides (sensor_options.hpp)
+  LogReaderOptions input;  // CARMEN geometry overrides, bag topics and frames (sensor_options.hpp)
   std::string out;
+  std::string trajectory_format = "text";  // text | tum
   bool json = false;
   bool quiet = false;
 };
@@ -135,7 +136,7 @@ void run_localize(const LocalizeOptions& options) {
     kidnap = Kidnap{.at = *options.kidnap_at, .by = SE2(by[0], by[1], deg_to_rad(by[2]))};
   }
   LocalizationSession session(*localizer, kidnap, OdometryGuardConfig{}, &map);
-  CarmenReader reader(options.log, options.geometry);
+  LogReader reader(options.log, options.input);
   Progress progress("localize", options.quiet);
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -155,7 +156,7 @@ void run_localize(const LocalizeOptions& options) {
   check(run.scans > 0, reader.path() + ": no front-laser scans in the log");
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  write_trajectory(options.out, session.trajectory());
+  write_trajectory(options.out, session.trajectory(), trajectory_format_from_name(options.trajectory_format));
 
   const double cpu = clock.cpu_seconds();
   JsonObject summary;
@@ -185,7 +186,7 @@ void run_localize(const LocalizeOptions& options) {
 void add_localize_command(CLI::App& app) {
   auto options = std::make_shared<LocalizeOptions>();
   CLI::App* command = app.add_subcommand("localize", "Localization in a known map: Markov grid, EKF, Monte Carlo, hybrid");
-  command->add_option("log", options->log, "CARMEN log (plain or .gz) with odometry")->required();
+  command->add_option("log", options->log, "CARMEN log (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder, with odometry")->required();
   command->add_option("--map", options->map, "Map YAML (ROS map_server format, e.g. from slam2d map)")->required();
   command->add_option("--method", options->method, "Localization method")
       ->check(CLI::IsMember({"markov", "ekf", "mcl", "hybrid"}))
@@ -204,8 +205,11 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--kidnap-at", options->kidnap_at, "s after the first scan: corrupt the odometry once (kidnap test)");
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();
-  add_sensor_options(command, options->geometry);
+  add_sensor_options(command, options->input);
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
+  command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")
+      ->check(CLI::IsMember({"text", "tum"}))
+      ->capture_default_str();
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_localize(*options); });

@@ -12,7 +12,7 @@ void add_map_command(CLI::App& app) {
   auto options = std::make_shared<MapJobOptions>();
   auto json = std::make_shared<bool>(false);
   CLI::App* command = app.add_subcommand("map", "Build an occupancy map and a trajectory from a CARMEN log");
-  command->add_option("log", options->log, "CARMEN log (plain or .gz)")->required();
+  command->add_option("log", options->log, "CARMEN log (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder")->required();
   command->add_option("--out", options->out_dir, "Output folder: map.pgm, map.yaml, map.png, trajectory.txt, summary.json")
       ->required();
   command->add_option("--method", options->method, "Mapping method")
@@ -22,7 +22,7 @@ void add_map_command(CLI::App& app) {
                       "hector, graph, rbpf: a method preset (configs/<method>.yaml; `slam2d config dump METHOD` prints the defaults); the flags below override it")
       ->check(CLI::ExistingFile);
   command->add_option("--resolution", options->resolution, "m per map cell (default: the method's, 0.05)");
-  add_sensor_options(command, options->geometry);
+  add_sensor_options(command, options->input);
   command->add_flag("--no-odometry", options->no_odometry, "hector, graph: ignore the log's odometry (initial guess: the last pose or constant velocity)");
   command->add_option("--levels", options->levels, "hector: map pyramid levels (default 3)")->check(CLI::Range(1, 16));
   command->add_option("--particles", options->particles, "rbpf: number of particles (default 30)")->check(CLI::Range(1, 10000));
@@ -30,6 +30,9 @@ void add_map_command(CLI::App& app) {
   command->add_option("--threads", options->threads,
                       "rbpf: threads for the particles (default 0: all hardware threads; 1: serial); the result does not depend on it")
       ->check(CLI::Range(0, 256));
+  command->add_option("--format", options->trajectory_format, "trajectory.txt as slam2d text (t x y theta) or tum (evo's format)")
+      ->check(CLI::IsMember({"text", "tum"}))
+      ->capture_default_str();
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

@@ -13,7 +13,7 @@
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/grid/render.hpp"
 #include "slam2d/io/atomic_file.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/methods/method_presets.hpp"
@@ -56,7 +56,7 @@ void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
 // with the progress line; fills every field of the run but the map.
 template <typename AddScan>
 MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
-  CarmenReader reader(options.log, options.geometry);
+  LogReader reader(options.log, options.input);
   Progress progress("map", options.quiet);
   MappingRun run;
   while (auto message = reader.next()) {
@@ -64,7 +64,8 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
     if (laser == nullptr) continue;
     if (!laser->has_poses && !options.no_odometry) {
       throw ParseError(reader.path(), laser->line,
-                       laser->type + " carries no odometry pose; use FLASER, RLASER or ROBOTLASER1 logs, or --no-odometry");
+                       laser->type + " carries no odometry pose; use FLASER, RLASER or ROBOTLASER1 logs, a bag with "
+                       "odometry, or --no-odometry");
     }
     run.trajectory.push_back(laser->scan.stamp, add_scan(*laser));
     if (run.trajectory.size() % 256 == 0) {
@@ -182,11 +183,12 @@ std::vector<SE2> poses_of(const Trajectory& trajectory) {
   return poses;
 }
 
-void write_outputs(const std::filesystem::path& dir, const MappingRun& run, const JsonObject& summary) {
+void write_outputs(const std::filesystem::path& dir, const MappingRun& run, const JsonObject& summary,
+                   TrajectoryFormat format) {
   std::filesystem::create_directories(dir);
   write_map((dir / "map.yaml").string(), run.map, "map.pgm");
   write_png((dir / "map.png").string(), render_map(run.map, poses_of(run.trajectory)));
-  write_trajectory((dir / "trajectory.txt").string(), run.trajectory);
+  write_trajectory((dir / "trajectory.txt").string(), run.trajectory, format);
   if (run.graph) write_g2o((dir / "graph.g2o").string(), to_pose_graph_file(*run.graph));
   write_file_atomically((dir / "summary.json").string(), summary.dump());
 }
@@ -212,6 +214,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   check(!options.particles || (*options.particles >= 1 && *options.particles <= 10000), "map: --particles must be in [1, 10000]");
   check(!options.resolution || (*options.resolution > 0.0 && *options.resolution <= 10.0), "map: --resolution must be in (0, 10] m");
   check(!options.levels || (*options.levels >= 1 && *options.levels <= 16), "map: --levels must be in [1, 16]");
+  trajectory_format_from_name(options.trajectory_format);  // checked before the work
   const RunClock clock;
   MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();
@@ -229,7 +232,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());
   summary.add("warnings", run.warnings);
-  write_outputs(options.out_dir, run, summary);
+  write_outputs(options.out_dir, run, summary, trajectory_format_from_name(options.trajectory_format));
   return {std::move(run.map), std::move(run.trajectory), std::move(summary)};
 }
 

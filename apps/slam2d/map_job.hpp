@@ -9,14 +9,15 @@
 #include "json.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/trajectory.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 
 namespace slam2d::cli {
 
 struct MapJobOptions {
-  std::string log;                  // CARMEN log, plain or .gz
+  std::string log;                  // CARMEN log (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
   std::string method = "odometry";  // odometry, hector, graph, rbpf
+  std::string trajectory_format = "text";  // trajectory.txt as slam2d text or TUM (evo)
   std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
   bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
   // Overrides of the method's config (preset or defaults) when set:
@@ -26,7 +27,7 @@ struct MapJobOptions {
   std::optional<std::uint64_t> seed;     // rbpf: seed of every random draw (same log + seed, same result)
   std::optional<int> threads;            // rbpf: threads for the particles, in [0, 256] (0: all hardware threads); same result
   bool quiet = false;               // no progress line
-  CarmenReaderOptions geometry;     // FLASER/RLASER geometry overrides (sensor_options.hpp); unset: PARAM, else convention
+  LogReaderOptions input;           // CARMEN geometry overrides, bag topics and frames (sensor_options.hpp)
 };
 
 struct MapJobResult {

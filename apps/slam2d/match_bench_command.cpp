@@ -21,7 +21,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/eval/statistics.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/methods/matcher_registry.hpp"
 
@@ -39,7 +39,7 @@ struct MatchBenchOptions {
   double success_trans = 0.1;       // m, a match within this and success_rot_deg counts as a success
   double success_rot_deg = 2.0;     // deg
   std::uint64_t seed = 1;
-  CarmenReaderOptions geometry;       // FLASER geometry overrides (sensor_options.hpp)
+  LogReaderOptions input;             // CARMEN geometry overrides, bag topics and frames
   bool json = false;
   bool quiet = false;
 };
@@ -58,9 +58,9 @@ struct ScanPairCase {
 
 std::vector<ReferencedScan> read_scans(const MatchBenchOptions& options) {
   std::optional<Trajectory> reference;
-  if (!options.reference.empty()) reference = read_trajectory(options.reference);
+  if (!options.reference.empty()) reference = read_any_trajectory(options.reference);
   const std::optional<StampIndex> index = reference ? std::optional<StampIndex>(StampIndex(*reference)) : std::nullopt;
-  CarmenReader reader(options.log, options.geometry);
+  LogReader reader(options.log, options.input);
   std::vector<ReferencedScan> scans;
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -222,7 +222,7 @@ void add_match_bench_command(CLI::App& app) {
   command->add_option("--success-trans", options->success_trans, "m, success threshold")->capture_default_str();
   command->add_option("--success-rot", options->success_rot_deg, "deg, success threshold")->capture_default_str();
   command->add_option("--seed", options->seed, "Seed of the pair choice and perturbations")->capture_default_str();
-  add_sensor_options(command, options->geometry);
+  add_sensor_options(command, options->input);
   command->add_flag("--json", options->json, "Print the results as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_match_bench(*options); });

@@ -16,7 +16,7 @@
 #include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 #include "slam2d/io/config_file.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/methods/matcher_registry.hpp"
@@ -30,9 +30,10 @@ struct OdometryOptions {
   std::string matcher = "pl-icp";
   std::string config;  // a preset .yaml for the matcher
   std::string out;
+  std::string trajectory_format = "text";  // text | tum
   std::optional<double> keyframe;            // m; 0: match every scan against the previous one
   std::optional<double> keyframe_angle_deg;  // deg
-  CarmenReaderOptions geometry;                // FLASER geometry overrides (sensor_options.hpp)
+  LogReaderOptions input;                      // CARMEN geometry overrides, bag topics and frames
   bool no_odometry = false;
   bool json = false;
   bool quiet = false;
@@ -51,7 +52,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
     if (*options.keyframe == 0.0) config.keyframe_angle = 0.0;
   }
   if (options.keyframe_angle_deg) config.keyframe_angle = deg_to_rad(*options.keyframe_angle_deg);
-  if (options.geometry.range_max) config.max_range = *options.geometry.range_max;
+  if (options.input.carmen.range_max) config.max_range = *options.input.carmen.range_max;
   validate(config);
   return config;
 }
@@ -59,7 +60,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
 void run_odometry(const OdometryOptions& options) {
   ScanOdometry odometry(configured_matcher(options), odometry_config(options));
   const RunClock clock;
-  CarmenReader reader(options.log, options.geometry);
+  LogReader reader(options.log, options.input);
   Progress progress("odometry", options.quiet);
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -77,7 +78,7 @@ void run_odometry(const OdometryOptions& options) {
   check(!trajectory.empty(), reader.path() + ": no front-laser scans in the log");
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  write_trajectory(options.out, trajectory);
+  write_trajectory(options.out, trajectory, trajectory_format_from_name(options.trajectory_format));
 
   const ScanOdometryStats& stats = odometry.stats();
   const double matches = static_cast<double>(std::max<std::size_t>(stats.matches, 1));
@@ -113,10 +114,13 @@ void add_odometry_command(CLI::App& app) {
   command->add_option("--keyframe", options->keyframe,
                       "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
   command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");
-  add_sensor_options(command, options->geometry,
+  add_sensor_options(command, options->input,
                      "m: readings at or above are dropped (default: 30 for matching, and the reader's no-return "
                      "threshold: the log's PARAM, else 80)");
   command->add_flag("--no-odometry", options->no_odometry, "Ignore the log's odometry (guess: constant velocity)");
+  command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")
+      ->check(CLI::IsMember({"text", "tum"}))
+      ->capture_default_str();
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_odometry(*options); });

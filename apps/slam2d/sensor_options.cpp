@@ -76,4 +76,22 @@ void print_reader_warnings(const CarmenReader& reader) {
   for (const std::string& warning : reader_warnings(reader)) std::fputs((warning + "\n").c_str(), stderr);
 }
 
+void add_sensor_options(CLI::App* command, LogReaderOptions& options, const std::string& range_max_help) {
+  add_sensor_options(command, options.carmen, range_max_help);
+  command->add_option("--scan-topic", options.bag.scan_topic, "bags: the LaserScan topic (default: the only one)");
+  command->add_option("--odom-topic", options.bag.odom_topic,
+                      "bags: the Odometry topic (default: the only one, else odom -> base on /tf)");
+  command->add_option("--imu-topic", options.bag.imu_topic, "bags: the Imu topic (default: the only one)");
+  command->add_option("--base-frame", options.bag.base_frame, "bags: the robot's frame (default: the odometry's child frame)");
+  command->add_option("--odom-frame", options.bag.odom_frame, "bags: the odometry frame (default: the odometry's frame)");
+}
+
+std::vector<std::string> reader_warnings(const LogReader& reader) {
+  return reader.carmen() != nullptr ? reader_warnings(*reader.carmen()) : reader.bag()->warnings();
+}
+
+void print_reader_warnings(const LogReader& reader) {
+  for (const std::string& warning : reader_warnings(reader)) std::fprintf(stderr, "%s\n", warning.c_str());
+}
+
 }  // namespace slam2d::cli

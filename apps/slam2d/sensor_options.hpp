@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "slam2d/io/carmen.hpp"
+#include "slam2d/io/log_reader.hpp"
 
 namespace slam2d::cli {
 
@@ -21,6 +22,10 @@ namespace slam2d::cli {
 /// the help of --range-max where the command gives it a further meaning.
 void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const std::string& range_max_help = "");
 
+/// The same, and the bag options --scan-topic, --odom-topic, --imu-topic, --base-frame and
+/// --odom-frame (automatic when the bag has one candidate) for a command that reads any log.
+void add_sensor_options(CLI::App* command, LogReaderOptions& options, const std::string& range_max_help = "");
+
 /// The warnings of what `reader` decided, one line each: the FLASER/RLASER geometries (PARAM lines
 /// dropped, ambiguous units: "PATH:LINE: warning: FLASER geometry, N beams: ...") and the odometry
 /// steps it repaired for reversing ("PATH: warning: the odometry integrates reversing as forward
@@ -29,5 +34,8 @@ std::vector<std::string> reader_warnings(const CarmenReader& reader);
 
 /// The same on stderr.
 void print_reader_warnings(const CarmenReader& reader);
+/// The warnings of any log: CARMEN's above, or what the bag assembly could not decide.
+std::vector<std::string> reader_warnings(const LogReader& reader);
+void print_reader_warnings(const LogReader& reader);
 
 }  // namespace slam2d::cli

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -353,6 +354,27 @@ TEST_F(CliTest, ABadPresetStopsMapAndLocalizeAtItsLineWithoutOutput) {
   EXPECT_EQ(localize.exit_code, 1);
   EXPECT_NE(localize.errors.find("ekf.yaml:2"), std::string::npos) << localize.errors;
   EXPECT_FALSE(std::filesystem::exists(dir.file("t.txt")));
+}
+
+TEST_F(CliTest, ATumTrajectoryIsWhatEvalReadsToTheSameFigures) {
+  TempDir dir;
+  const std::string base = "map " + log() + " --method odometry --quiet --out ";
+  ASSERT_EQ(run_command(slam2d(base + dir.file("text"))).exit_code, 0);
+  ASSERT_EQ(run_command(slam2d(base + dir.file("tum") + " --format tum")).exit_code, 0);
+  std::ifstream in(dir.file("tum/trajectory.txt"));
+  std::string line;
+  while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
+  }
+  EXPECT_EQ(std::count(line.begin(), line.end(), ' '), 7) << "8 columns: t tx ty tz qx qy qz qw: " << line;
+  const auto ate = [&](const std::string& trajectory) {
+    const CommandResult eval = run_command(slam2d("eval --json " + trajectory + " --reference " + truth()));
+    EXPECT_EQ(eval.exit_code, 0) << eval.errors;
+    return json_number(eval.output, "ate_rmse");
+  };
+  const auto text_ate = ate(dir.file("text/trajectory.txt"));
+  ASSERT_TRUE(text_ate.has_value());
+  EXPECT_NEAR(*ate(dir.file("tum/trajectory.txt")), *text_ate, 1e-12);
+  EXPECT_NE(run_command(slam2d(base + dir.file("bad") + " --format kitti")).exit_code, 0);
 }
 
 TEST(CliErrors, UnknownMethodAndMissingOptionsAreRefused) {

@@ -123,4 +123,36 @@ void write_trajectory_tum(const std::string& path, const Trajectory& trajectory)
   });
 }
 
+TrajectoryFormat trajectory_format_from_name(const std::string& name) {
+  if (name == "text") return TrajectoryFormat::kText;
+  if (name == "tum") return TrajectoryFormat::kTum;
+  throw Error("unknown trajectory format '" + name + "' (known: text, tum)");
+}
+
+TrajectoryFormat detect_trajectory_format(const std::string& path) {
+  LineReader reader(path);
+  std::string line;
+  while (reader.next(line)) {
+    if (is_blank_or_comment(line)) continue;
+    const std::size_t fields = split_fields(line).size();
+    if (fields == kTextFields.size()) return TrajectoryFormat::kText;
+    if (fields == kTumFields.size()) return TrajectoryFormat::kTum;
+    reader.fail("expected 4 numbers (timestamp x y theta) or 8 (TUM: timestamp tx ty tz qx qy qz qw), got " +
+                std::to_string(fields));
+  }
+  return TrajectoryFormat::kText;  // no data line: an empty trajectory either way
+}
+
+Trajectory read_any_trajectory(const std::string& path) {
+  return detect_trajectory_format(path) == TrajectoryFormat::kTum ? read_trajectory_tum(path) : read_trajectory(path);
+}
+
+void write_trajectory(const std::string& path, const Trajectory& trajectory, TrajectoryFormat format) {
+  if (format == TrajectoryFormat::kTum) {
+    write_trajectory_tum(path, trajectory);
+  } else {
+    write_trajectory(path, trajectory);
+  }
+}
+
 }  // namespace slam2d

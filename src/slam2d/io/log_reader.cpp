@@ -1,0 +1,62 @@
+#include "slam2d/io/log_reader.hpp"
+
+#include <filesystem>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/io/mcap.hpp"
+#include "slam2d/io/ros1_bag.hpp"
+#include "slam2d/io/rosbag2.hpp"
+
+namespace slam2d {
+
+LogFormat detect_log_format(const std::string& path) {
+  if (is_rosbag2(path)) return LogFormat::kRosbag2;
+  if (std::filesystem::is_regular_file(path)) {
+    if (is_ros1_bag(path)) return LogFormat::kRos1Bag;
+    if (is_mcap(path)) return LogFormat::kMcap;
+  }
+  return LogFormat::kCarmen;
+}
+
+const char* log_format_name(LogFormat format) {
+  switch (format) {
+    case LogFormat::kCarmen: return "carmen";
+    case LogFormat::kRos1Bag: return "ros1";
+    case LogFormat::kMcap: return "mcap";
+    case LogFormat::kRosbag2: return "rosbag2";
+  }
+  return "?";
+}
+
+namespace {
+
+std::unique_ptr<BagSource> open_bag(LogFormat format, const std::string& path) {
+  switch (format) {
+    case LogFormat::kRos1Bag: return open_ros1_bag(path);
+    case LogFormat::kMcap: return open_mcap(path);
+    case LogFormat::kRosbag2: return open_rosbag2(path);
+    case LogFormat::kCarmen: break;
+  }
+  throw Error(path + ": not a bag");
+}
+
+}  // namespace
+
+LogReader::LogReader(const std::string& path, LogReaderOptions options) : format_(detect_log_format(path)) {
+  if (format_ == LogFormat::kCarmen) {
+    carmen_ = std::make_unique<CarmenReader>(path, std::move(options.carmen));
+  } else {
+    bag_ = std::make_unique<BagLogReader>(open_bag(format_, path), std::move(options.bag));
+  }
+}
+
+LogReader::~LogReader() = default;
+LogReader::LogReader(LogReader&&) noexcept = default;
+LogReader& LogReader::operator=(LogReader&&) noexcept = default;
+
+std::optional<SensorMessage> LogReader::next() { return carmen_ ? carmen_->next() : bag_->next(); }
+double LogReader::progress() const { return carmen_ ? carmen_->progress() : bag_->progress(); }
+const std::string& LogReader::path() const { return carmen_ ? carmen_->path() : bag_->path(); }
+CarmenStats LogReader::stats() const { return carmen_ ? carmen_->stats() : CarmenStats{}; }
+
+}  // namespace slam2d
