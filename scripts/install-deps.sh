@@ -8,6 +8,9 @@ packages=(
   libeigen3-dev libnanoflann-dev libsuitesparse-dev libyaml-cpp-dev
   libcli11-dev libfmt-dev zlib1g-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
+  libsqlite3-dev
+  libzstd-dev
+  liblz4-dev
   python3 python3-dev python3-pybind11 python3-numpy python3-pytest
 )
 
