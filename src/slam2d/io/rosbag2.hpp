@@ -1,0 +1,26 @@
+#pragma once
+// rosbag2 folders (ROS 2): metadata.yaml beside the storage file, MCAP ("mcap") or SQLite
+// ("sqlite3", a .db3 with the Humble tables topics(id, name, type, serialization_format,
+// offered_qos_profiles) and messages(id, topic_id, timestamp, data)).
+
+#include <memory>
+#include <string>
+
+#include "slam2d/io/bag_source.hpp"
+
+namespace slam2d {
+
+/// True for a folder holding a metadata.yaml, or for the path of a metadata.yaml itself.
+bool is_rosbag2(const std::string& path);
+
+/// Opens a rosbag2 folder (or its metadata.yaml): storage_identifier and relative_file_paths
+/// from metadata.yaml, then open_mcap on the .mcap or an SQLite reader on the .db3 (messages
+/// ORDER BY timestamp, id; DecodedRecord::index is the messages row id). Throws Error("PATH: ...")
+/// for a missing or malformed metadata.yaml, an unknown storage identifier, a storage file that
+/// does not exist, a split bag (more than one storage file) and a .db3 without those tables.
+std::unique_ptr<BagSource> open_rosbag2(const std::string& path);
+
+/// The SQLite reader alone, on a .db3 file.
+std::unique_ptr<BagSource> open_rosbag2_sqlite(const std::string& db3_path);
+
+}  // namespace slam2d
