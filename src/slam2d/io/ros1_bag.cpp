@@ -1,7 +1,6 @@
 #include "slam2d/io/ros1_bag.hpp"
 
 #include <algorithm>
-#include <cstring>
 #include <fstream>
 #include <future>
 #include <map>
@@ -216,17 +215,16 @@ class Ros1Bag final : public BagSource {
         topics_.push_back({.name = connection.topic, .type = connection.type});
       }
     }
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> span(topics_.size(), {UINT64_MAX, 0});
+    std::vector<std::pair<ros1::Time, ros1::Time>> span(topics_.size());  // first, last
     for (const IndexEntry& entry : entries_) {
       const std::size_t t = topic_index.at(connections_[entry.connection].topic);
-      ++topics_[t].count;
-      span[t] = {std::min(span[t].first, entry.time_ns), std::max(span[t].second, entry.time_ns)};
+      auto& [first, last] = span[t];
+      if (topics_[t].count++ == 0 || entry.time_ns < first.nanoseconds()) first = entry.time;
+      if (entry.time_ns > last.nanoseconds()) last = entry.time;
     }
-    for (const IndexEntry& entry : entries_) {  // the seconds of the extreme times, as read
-      BagTopic& topic = topics_[topic_index.at(connections_[entry.connection].topic)];
-      const auto& [first, last] = span[static_cast<std::size_t>(&topic - topics_.data())];
-      if (entry.time_ns == first) topic.first_stamp = entry.time.seconds();
-      if (entry.time_ns == last) topic.last_stamp = entry.time.seconds();
+    for (std::size_t t = 0; t < topics_.size(); ++t) {
+      topics_[t].first_stamp = span[t].first.seconds();
+      topics_[t].last_stamp = span[t].second.seconds();
     }
   }
 
