@@ -1,10 +1,11 @@
 #include "slam2d/io/ros1_bag.hpp"
 
 #include <algorithm>
-#include <cstring>
 #include <fstream>
+#include <future>
 #include <map>
 #include <set>
+#include <thread>
 #include <utility>
 
 #include "slam2d/io/detail/ros1_messages.hpp"
@@ -214,17 +215,16 @@ class Ros1Bag final : public BagSource {
         topics_.push_back({.name = connection.topic, .type = connection.type});
       }
     }
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> span(topics_.size(), {UINT64_MAX, 0});
+    std::vector<std::pair<ros1::Time, ros1::Time>> span(topics_.size());  // first, last
     for (const IndexEntry& entry : entries_) {
       const std::size_t t = topic_index.at(connections_[entry.connection].topic);
-      ++topics_[t].count;
-      span[t] = {std::min(span[t].first, entry.time_ns), std::max(span[t].second, entry.time_ns)};
+      auto& [first, last] = span[t];
+      if (topics_[t].count++ == 0 || entry.time_ns < first.nanoseconds()) first = entry.time;
+      if (entry.time_ns > last.nanoseconds()) last = entry.time;
     }
-    for (const IndexEntry& entry : entries_) {  // the seconds of the extreme times, as read
-      BagTopic& topic = topics_[topic_index.at(connections_[entry.connection].topic)];
-      const auto& [first, last] = span[static_cast<std::size_t>(&topic - topics_.data())];
-      if (entry.time_ns == first) topic.first_stamp = entry.time.seconds();
-      if (entry.time_ns == last) topic.last_stamp = entry.time.seconds();
+    for (std::size_t t = 0; t < topics_.size(); ++t) {
+      topics_[t].first_stamp = span[t].first.seconds();
+      topics_[t].last_stamp = span[t].second.seconds();
     }
   }
 
@@ -251,7 +251,14 @@ class Ros1Bag final : public BagSource {
     }
     std::ranges::stable_sort(queue_, {}, [this](std::size_t i) { return entries_[i].time_ns; });
     last_use_.assign(chunks_.size(), 0);
-    for (std::size_t q = 0; q < queue_.size(); ++q) last_use_[entries_[queue_[q]].chunk] = q + 1;
+    chunk_order_.clear();
+    for (std::size_t q = 0; q < queue_.size(); ++q) {
+      const std::uint32_t chunk = entries_[queue_[q]].chunk;
+      if (last_use_[chunk] == 0) chunk_order_.push_back(chunk);
+      last_use_[chunk] = q + 1;
+    }
+    pending_.clear();
+    next_to_start_ = 0;
     chunk_data_.clear();
     next_ = 0;
     wanted_ = wanted;
@@ -262,16 +269,38 @@ class Ros1Bag final : public BagSource {
     return std::pair(entries_[a].time_ns, a) > std::pair(entries_[b].time_ns, b);
   }
 
+  // A chunk's records, decompressed. Chunks are decompressed on worker threads, in the order the
+  // queue first needs them, up to one per core ahead of the reader (bz2 dominates reading time).
   const std::vector<std::uint8_t>& chunk_data(std::uint32_t chunk_number) {
     const auto found = chunk_data_.find(chunk_number);
     if (found != chunk_data_.end()) return found->second;
-    const Chunk& chunk = chunks_[chunk_number];
+    while (!pending_.contains(chunk_number)) {
+      check(next_to_start_ < chunk_order_.size(), "chunk at byte " + std::to_string(chunks_[chunk_number].pos) +
+                                                      " failed to decompress before");
+      start_decompression();
+    }
+    auto future = std::move(pending_.at(chunk_number));
+    pending_.erase(chunk_number);
+    while (pending_.size() < chunks_ahead_ && next_to_start_ < chunk_order_.size()) start_decompression();
     try {
-      const std::vector<std::uint8_t> compressed = file_.read(chunk.layout.data_pos, chunk.layout.data_len);
-      return chunk_data_[chunk_number] = ros1::decompress_chunk(chunk.compression, compressed, chunk.size);
+      return chunk_data_[chunk_number] = future.get();
+    } catch (const Error& e) {
+      throw Error("chunk at byte " + std::to_string(chunks_[chunk_number].pos) + ": " + e.what());
+    }
+  }
+
+  void start_decompression() {
+    const std::uint32_t chunk_number = chunk_order_[next_to_start_++];
+    const Chunk& chunk = chunks_[chunk_number];
+    std::vector<std::uint8_t> compressed;
+    try {
+      compressed = file_.read(chunk.layout.data_pos, chunk.layout.data_len);
     } catch (const Error& e) {
       throw Error("chunk at byte " + std::to_string(chunk.pos) + ": " + e.what());
     }
+    pending_[chunk_number] = std::async(std::launch::async, [compressed = std::move(compressed), &chunk] {
+      return ros1::decompress_chunk(chunk.compression, compressed, chunk.size);
+    });
   }
 
   DecodedRecord read_message(std::size_t file_index) {
@@ -313,6 +342,10 @@ class Ros1Bag final : public BagSource {
   std::optional<std::size_t> last_yielded_;
   std::vector<std::size_t> last_use_;  // per chunk: 1 + the queue position of its last message
   std::map<std::uint32_t, std::vector<std::uint8_t>> chunk_data_;  // decompressed, while needed
+  std::vector<std::uint32_t> chunk_order_;                          // chunks in the order of first use
+  std::size_t next_to_start_ = 0;                                   // in chunk_order_
+  std::map<std::uint32_t, std::future<std::vector<std::uint8_t>>> pending_;  // being decompressed
+  const std::size_t chunks_ahead_ = std::max(1u, std::thread::hardware_concurrency());
 };
 
 }  // namespace
