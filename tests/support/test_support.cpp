@@ -1,6 +1,7 @@
 #include "support/test_support.hpp"
 
 #include <sys/wait.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdio>
@@ -50,6 +51,28 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ignored;
   std::filesystem::remove_all(path_, ignored);
+}
+
+std::filesystem::path unpack_rosbag2(const std::filesystem::path& folder, const std::filesystem::path& into) {
+  namespace fs = std::filesystem;
+  const fs::path copy = into / folder.filename();
+  fs::create_directories(copy);
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    const fs::path& from = entry.path();
+    if (from.extension() != ".gz") {
+      fs::copy_file(from, copy / from.filename(), fs::copy_options::overwrite_existing);
+      continue;
+    }
+    gzFile in = gzopen(from.c_str(), "rb");
+    if (!in) throw Error("unpack_rosbag2: cannot open " + from.string());
+    std::ofstream out(copy / from.stem(), std::ios::binary);
+    char buffer[1 << 16];
+    int n;
+    while ((n = gzread(in, buffer, sizeof buffer)) > 0) out.write(buffer, n);
+    gzclose(in);
+    if (n < 0 || !out) throw Error("unpack_rosbag2: cannot gunzip " + from.string());
+  }
+  return copy;
 }
 
 std::optional<std::filesystem::path> real_data_dir() {

@@ -33,6 +33,10 @@ std::optional<std::filesystem::path> real_data_dir();
 /// True when $SLAM2D_REQUIRE_DATA=1 (set by .ci/run): missing data is then a failure, not a skip.
 bool real_data_required();
 
+/// A copy of the rosbag2 folder `folder` in `into` (a new subfolder of the same name): metadata.yaml
+/// and each storage file, those stored as NAME.gz gunzipped to NAME (zlib). Returns the copy's path.
+std::filesystem::path unpack_rosbag2(const std::filesystem::path& folder, const std::filesystem::path& into);
+
 /// The path of the slam2d command-line tool (from $SLAM2D_BIN).
 std::string cli_path();
 /// A shell command running the slam2d tool with `arguments`.

@@ -139,6 +139,13 @@ std::vector<std::uint8_t> decompress_lz4(const std::uint8_t* data, std::size_t s
   return out;
 }
 
+void check_compression(const std::string& compression) {
+  if (!compression.empty() && compression != "zstd" && compression != "lz4") {
+    throw Malformed("unknown compression '" + compression + "' (slam2d reads '', 'zstd', 'lz4')");
+  }
+}
+
+/// The records of a chunk; `compression` is one check_compression accepts.
 std::vector<std::uint8_t> decompress(const std::string& compression, const std::uint8_t* data, std::uint64_t size,
                                      std::uint64_t uncompressed) {
   if (compression.empty()) {
@@ -146,9 +153,6 @@ std::vector<std::uint8_t> decompress(const std::string& compression, const std::
       throw Malformed("uncompressed chunk of " + std::to_string(size) + " bytes says " + std::to_string(uncompressed));
     }
     return std::vector<std::uint8_t>(data, data + size);
-  }
-  if (compression != "zstd" && compression != "lz4") {
-    throw Malformed("unknown compression '" + compression + "' (slam2d reads '', 'zstd', 'lz4')");
   }
   if (uncompressed > kMaxUncompressed || uncompressed > kMaxRatio * std::max<std::uint64_t>(size, 1)) {
     throw Malformed("implausible uncompressed size " + std::to_string(uncompressed) + " for " + std::to_string(size) +
@@ -441,6 +445,7 @@ class McapSource final : public BagSource {
       const std::uint64_t uncompressed_size = fields.u64();
       const std::uint32_t crc = fields.u32();
       const std::string compression = fields.string();
+      check_compression(compression);
       Fields records = fields.sub64("the records");
       chunk_data_ = decompress(compression, records.data(), records.remaining(), uncompressed_size);
       if (crc != 0) {

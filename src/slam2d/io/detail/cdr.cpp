@@ -113,6 +113,15 @@ Quaternion read_quaternion(CdrReader& in) {
   return q;
 }
 
+/// geometry_msgs/Pose or Transform (a Point or Vector3, then a Quaternion), made planar.
+SE2 read_planar_pose(CdrReader& in) {
+  const double x = in.read<double>();
+  const double y = in.read<double>();
+  in.read<double>();  // z
+  const Quaternion q = read_quaternion(in);
+  return SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+}
+
 DecodedScan read_laser_scan(CdrReader& in) {
   DecodedScan out;
   Header header = read_header(in);
@@ -138,13 +147,9 @@ DecodedOdometry read_odometry(CdrReader& in) {
   Header header = read_header(in);
   out.frame_id = std::move(header.frame_id);
   out.child_frame_id = in.string();
-  const double x = in.read<double>();
-  const double y = in.read<double>();
-  in.read<double>();  // z
-  const Quaternion q = read_quaternion(in);
-  in.skip_doubles(36);  // pose covariance
   out.reading.stamp = header.stamp;
-  out.reading.pose = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+  out.reading.pose = read_planar_pose(in);
+  in.skip_doubles(36);  // pose covariance
   out.reading.tv = in.read<double>();  // twist.linear.x
   in.skip_doubles(2);                  // linear.y, linear.z
   in.skip_doubles(2);                  // angular.x, angular.y
@@ -165,11 +170,7 @@ DecodedTransforms read_tf_message(CdrReader& in, bool is_static) {
     transform.stamp = header.stamp;
     transform.parent = std::move(header.frame_id);
     transform.child = in.string();
-    const double x = in.read<double>();
-    const double y = in.read<double>();
-    in.read<double>();  // z
-    const Quaternion q = read_quaternion(in);
-    transform.T_parent_child = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+    transform.T_parent_child = read_planar_pose(in);
     out.transforms.push_back(std::move(transform));
   }
   return out;
