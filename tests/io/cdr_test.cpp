@@ -2,6 +2,7 @@
 // and cut short at every length.
 
 #include "slam2d/io/detail/cdr.hpp"
+#include "slam2d/io/detail/ros_quaternion.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,6 +7,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "slam2d/io/detail/ros_quaternion.hpp"
+
 namespace slam2d::detail {
 namespace {
 
@@ -100,12 +102,8 @@ Header read_header(CdrReader& in) {
   return header;
 }
 
-struct Quaternion {
-  double x, y, z, w;
-};
-
-Quaternion read_quaternion(CdrReader& in) {
-  Quaternion q{};
+RosQuaternion read_quaternion(CdrReader& in) {
+  RosQuaternion q{};
   q.x = in.read<double>();
   q.y = in.read<double>();
   q.z = in.read<double>();
@@ -118,8 +116,8 @@ SE2 read_planar_pose(CdrReader& in) {
   const double x = in.read<double>();
   const double y = in.read<double>();
   in.read<double>();  // z
-  const Quaternion q = read_quaternion(in);
-  return SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+  const RosQuaternion q = read_quaternion(in);
+  return SE2(x, y, q.yaw());
 }
 
 DecodedScan read_laser_scan(CdrReader& in) {
@@ -181,9 +179,9 @@ DecodedImu read_imu(CdrReader& in) {
   Header header = read_header(in);
   out.stamp = header.stamp;
   out.frame_id = std::move(header.frame_id);
-  const Quaternion q = read_quaternion(in);
-  out.roll = std::atan2(2.0 * (q.w * q.x + q.y * q.z), 1.0 - 2.0 * (q.x * q.x + q.y * q.y));
-  out.pitch = std::asin(std::clamp(2.0 * (q.w * q.y - q.z * q.x), -1.0, 1.0));
+  const RosQuaternion q = read_quaternion(in);
+  out.roll = q.roll();
+  out.pitch = q.pitch();
   in.skip_doubles(9);  // orientation covariance
   in.skip_doubles(2);  // angular_velocity x, y
   out.yaw_rate = in.read<double>();
@@ -238,9 +236,6 @@ DecodedRecord decode_record(const std::string& path, const std::string& topic, R
   }
 }
 
-double quaternion_yaw(double x, double y, double z, double w) {
-  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
-}
 
 double nanoseconds_to_seconds(std::uint64_t ns) {
   return static_cast<double>(ns / 1000000000u) + static_cast<double>(ns % 1000000000u) * 1e-9;

@@ -47,8 +47,6 @@ DecodedRecord decode_record(const std::string& path, const std::string& topic, R
                             std::uint64_t receive_time_ns, std::size_t index, const std::uint8_t* data,
                             std::size_t size);
 
-/// Yaw of the quaternion (x, y, z, w): atan2(2(wz + xy), 1 - 2(y^2 + z^2)).
-double quaternion_yaw(double x, double y, double z, double w);
 
 /// s from a ROS time in ns (exact to the ns for the integer second part).
 double nanoseconds_to_seconds(std::uint64_t ns);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "slam2d/io/detail/ros_quaternion.hpp"
+
 namespace slam2d::ros1 {
 
 namespace {
@@ -33,11 +35,8 @@ Header read_header(WireReader& reader) {
   return {sec + nsec * 1e-9, reader.string()};
 }
 
-struct Quaternion {
-  double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
-};
-Quaternion read_quaternion(WireReader& reader) {
-  Quaternion q;
+detail::RosQuaternion read_quaternion(WireReader& reader) {
+  detail::RosQuaternion q;
   q.x = reader.f64();
   q.y = reader.f64();
   q.z = reader.f64();
@@ -85,9 +84,9 @@ DecodedOdometry read_odometry(WireReader& reader) {
   const double x = reader.f64();
   const double y = reader.f64();
   reader.skip(8);  // z
-  const Quaternion q = read_quaternion(reader);
+  const detail::RosQuaternion q = read_quaternion(reader);
   reader.skip(kCovariance6Bytes);
-  reading.pose = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+  reading.pose = SE2(x, y, q.yaw());
   reading.tv = reader.f64();  // twist.linear.x
   reader.skip(2 * 8 + 2 * 8);  // linear y z, angular x y
   reading.rv = reader.f64();   // twist.angular.z
@@ -112,8 +111,8 @@ DecodedTransforms read_transforms(WireReader& reader, bool is_static) {
     const double x = reader.f64();
     const double y = reader.f64();
     reader.skip(8);  // z
-    const Quaternion q = read_quaternion(reader);
-    transform.T_parent_child = SE2(x, y, quaternion_yaw(q.x, q.y, q.z, q.w));
+    const detail::RosQuaternion q = read_quaternion(reader);
+    transform.T_parent_child = SE2(x, y, q.yaw());
   }
   return out;
 }
@@ -125,9 +124,9 @@ DecodedImu read_imu(WireReader& reader) {
   Header header = read_header(reader);
   out.stamp = header.stamp;
   out.frame_id = std::move(header.frame_id);
-  const Quaternion q = read_quaternion(reader);
-  out.roll = std::atan2(2.0 * (q.w * q.x + q.y * q.z), 1.0 - 2.0 * (q.x * q.x + q.y * q.y));
-  out.pitch = std::asin(std::clamp(2.0 * (q.w * q.y - q.z * q.x), -1.0, 1.0));
+  const detail::RosQuaternion q = read_quaternion(reader);
+  out.roll = q.roll();
+  out.pitch = q.pitch();
   reader.skip(kCovariance3Bytes);
   reader.skip(2 * 8);  // angular_velocity x y
   out.yaw_rate = reader.f64();
@@ -147,9 +146,6 @@ std::optional<MessageType> message_type(std::string_view name) {
 
 std::string_view md5sum(MessageType type) { return kTypes[static_cast<std::size_t>(type)].md5sum; }
 
-double quaternion_yaw(double x, double y, double z, double w) {
-  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
-}
 
 DecodedMessage decode_message(MessageType type, Bytes data, bool is_static) {
   WireReader reader(data);

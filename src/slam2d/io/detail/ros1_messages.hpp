@@ -21,7 +21,5 @@ std::string_view md5sum(MessageType type);
 /// from /tf_static. Throws Error for data too short or too long for the type.
 DecodedMessage decode_message(MessageType type, Bytes data, bool is_static);
 
-/// Yaw of the quaternion (x, y, z, w), rad: rotation about z of its z-y-x Euler angles.
-double quaternion_yaw(double x, double y, double z, double w);
 
 }  // namespace slam2d::ros1

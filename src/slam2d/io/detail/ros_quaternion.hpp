@@ -1,0 +1,23 @@
+#pragma once
+// The rotation of a ROS geometry_msgs/Quaternion as the planar readers need it: the z-y-x Euler
+// angles (yaw for poses and transforms, roll and pitch for an IMU's attitude). One home for the
+// ROS 1 and the CDR decoders.
+
+#include <algorithm>
+#include <cmath>
+
+namespace slam2d::detail {
+
+struct RosQuaternion {
+  double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
+
+  /// atan2(2(wz + xy), 1 - 2(y^2 + z^2)).
+  double yaw() const { return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)); }
+  double roll() const { return std::atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y)); }
+  double pitch() const { return std::asin(std::clamp(2.0 * (w * y - z * x), -1.0, 1.0)); }
+};
+
+/// Yaw of the quaternion (x, y, z, w).
+inline double quaternion_yaw(double x, double y, double z, double w) { return RosQuaternion{x, y, z, w}.yaw(); }
+
+}  // namespace slam2d::detail
