@@ -33,6 +33,10 @@ void add_map_command(CLI::App& app) {
   command->add_option("--format", options->trajectory_format, "trajectory.txt as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();
+  command->add_option("--trajectory-frame", options->trajectory_frame,
+                      "robot: the robot's (base frame's) pose; sensor: the laser's (the robot's pose times the laser's mounting)")
+      ->check(CLI::IsMember({"robot", "sensor"}))
+      ->capture_default_str();
   command->add_flag("--json", *json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options, json] {

@@ -38,6 +38,7 @@ struct MappingRun {
   double data_duration = 0.0;  // s, last scan stamp minus first, in file order
   std::vector<std::string> warnings;  // what the reader and the method could not decide
   double resolution = 0.0;            // m per cell of the map written
+  SE2 T_robot_sensor;                 // the first scan's mounting (--trajectory-frame sensor)
 };
 
 // The method's config: the library defaults, or the preset of --config, then the flags given.
@@ -67,6 +68,7 @@ MappingRun run_over_scans(const MapJobOptions& options, AddScan&& add_scan) {
                        laser->type + " carries no odometry pose; use FLASER, RLASER or ROBOTLASER1 logs, a bag with "
                        "odometry, or --no-odometry");
     }
+    if (run.trajectory.empty()) run.T_robot_sensor = laser->scan.T_robot_sensor;
     run.trajectory.push_back(laser->scan.stamp, add_scan(*laser));
     if (run.trajectory.size() % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans", run.trajectory.size()));
@@ -215,6 +217,8 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   check(!options.resolution || (*options.resolution > 0.0 && *options.resolution <= 10.0), "map: --resolution must be in (0, 10] m");
   check(!options.levels || (*options.levels >= 1 && *options.levels <= 16), "map: --levels must be in [1, 16]");
   trajectory_format_from_name(options.trajectory_format);  // checked before the work
+  check(options.trajectory_frame == "robot" || options.trajectory_frame == "sensor",
+        "map: --trajectory-frame must be robot or sensor");
   const RunClock clock;
   MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();
@@ -232,6 +236,12 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());
   summary.add("warnings", run.warnings);
+  if (options.trajectory_frame == "sensor") {  // the laser's pose: what a benchmark's relations may describe
+    Trajectory sensor;
+    sensor.reserve(run.trajectory.size());
+    for (const StampedPose& stamped : run.trajectory) sensor.push_back(stamped.stamp, stamped.pose * run.T_robot_sensor);
+    run.trajectory = std::move(sensor);
+  }
   write_outputs(options.out_dir, run, summary, trajectory_format_from_name(options.trajectory_format));
   return {std::move(run.map), std::move(run.trajectory), std::move(summary)};
 }

@@ -18,6 +18,7 @@ struct MapJobOptions {
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
   std::string method = "odometry";  // odometry, hector, graph, rbpf
   std::string trajectory_format = "text";  // trajectory.txt as slam2d text or TUM (evo)
+  std::string trajectory_frame = "robot";  // robot (base) | sensor: the laser's pose, T_robot_sensor of the first scan applied
   std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
   bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
   // Overrides of the method's config (preset or defaults) when set:

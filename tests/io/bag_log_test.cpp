@@ -93,6 +93,27 @@ TEST(BagLog, EachScanGetsTheOdometryInterpolatedAtItsStampInTimeOrder) {
   EXPECT_TRUE(reader.warnings().empty());
 }
 
+// A recorded log whose stamps step back (Intel: scans up to 0.9 s out of order): the scans keep
+// the bag's order and each gets the odometry at its own stamp, from the readings around it.
+TEST(BagLog, StampsThatStepBackKeepTheBagsOrderAndTheirOwnOdometry) {
+  BagLogReader reader(std::make_unique<FakeSource>(
+      kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), odometry(2.0, SE2(2.0, 0.0, 0.0)), scan(1.5),
+                                          odometry(1.0, SE2(1.0, 0.0, 0.0)), scan(0.5), odometry(3.0, SE2(3.0, 0.0, 0.0)),
+                                          scan(2.5)}));
+  std::vector<double> stamps, xs;
+  for (const SensorMessage& message : read_all(reader)) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+      stamps.push_back(laser->scan.stamp);
+      xs.push_back(laser->odom_pose.x());
+    }
+  }
+  EXPECT_EQ(stamps, (std::vector<double>{1.5, 0.5, 2.5}));
+  ASSERT_EQ(xs.size(), 3u);
+  EXPECT_NEAR(xs[0], 1.5, 1e-12);  // between the readings at 1 and 2 s (1 s arrived after it)
+  EXPECT_NEAR(xs[1], 0.5, 1e-12);
+  EXPECT_NEAR(xs[2], 2.5, 1e-12);
+}
+
 TEST(BagLog, AStaticTransformTheOtherWayRoundIsInverted) {
   BagLogReader reader(std::make_unique<FakeSource>(
       kTopics, std::vector<DecodedRecord>{static_transform("laser", "base_link", SE2(-0.1, 0.0, 0.0)),

@@ -1,7 +1,7 @@
 // The real logs as bags (../shared/data/bags, written by third-party tools): `slam2d info` on a
-// bag, and `slam2d map` on a bag against the same log's CARMEN file: the same scans and, on ACES,
-// a relation error within 10% of the CARMEN run's (the bags spread the beams over exactly 180 deg
-// and carry the odometry on its own topic, so the inputs differ slightly).
+// bag, and `slam2d map` on a bag against the same log's CARMEN file: the same scans and a relation
+// error close to the CARMEN run's (the bags spread the beams over exactly 180 deg and carry the
+// odometry on its own topic, so the inputs differ).
 
 #include <gtest/gtest.h>
 
@@ -45,7 +45,8 @@ TEST(BagCli, InfoListsTheTopicsAndWhatItUses) {
 std::pair<double, double> map_and_eval(const std::string& log, const std::string& method, const std::string& relations) {
   test::TempDir out;
   const CommandResult map =
-      run_command(slam2d("map --quiet --json --method " + method + " --out " + out.path().string() + " " + log));
+      run_command(slam2d("map --quiet --json --trajectory-frame sensor --method " + method + " --out " +
+                         out.path().string() + " " + log));
   EXPECT_EQ(map.exit_code, 0) << map.errors;
   const CommandResult eval =
       run_command(slam2d("eval --json " + out.file("trajectory.txt") + " --relations " + relations));
@@ -53,30 +54,56 @@ std::pair<double, double> map_and_eval(const std::string& log, const std::string
   return {json_number(map.output, "scans").value_or(-1.0), json_number(eval.output, "trans_mean").value_or(1e9)};
 }
 
-// ACES: graph SLAM on the ROS 1 bag within 10% of the CARMEN run, and the MCAP conversion of the
-// same bag gives the identical trajectory. (Intel and FR079 are not yet within 10%: the Intel
-// bag's scan stamps go backwards, so its time order is not the recording order; FR079's
-// /tf_static mounts the laser 4 cm ahead of base_link, and the relations are of the laser's pose.)
-TEST(BagMapping, GraphSlamOnAcesMatchesTheCarmenRunAndTheFormatsAgree) {
+struct BagLog {
+  const char* name;
+  const char* bag;
+  const char* carmen;
+  const char* relations;
+  double scans;
+  double allowed_ratio;  // bag error / CARMEN error
+};
+
+void PrintTo(const BagLog& log, std::ostream* os) { *os << log.name; }
+
+class BagMapping : public ::testing::TestWithParam<BagLog> {};
+
+// Graph SLAM on the ROS 1 bag against the CARMEN run, both as the laser's trajectory (the frame of
+// the benchmark's relations; FR079's /tf_static mounts the laser 4 cm ahead of base_link): within
+// 10% on ACES and FR079. Intel's bag spreads its 180 beams over 180 deg where the log's sensor
+// covers 179 deg (1 deg steps): the CARMEN log read with the bag's angles already scores 0.027 m
+// against 0.018 m, so Intel is held to 1.9x until the bag's geometry can be corrected.
+TEST_P(BagMapping, GraphSlamOnTheBagMatchesTheCarmenRun) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  const std::string relations = (data / "aces/aces.relations").string();
-  const auto [carmen_scans, carmen_error] = map_and_eval((data / "aces/aces.clf.gz").string(), "graph", relations);
+  const BagLog& log = GetParam();
+  const std::string relations = (data / log.relations).string();
+  const auto [carmen_scans, carmen_error] = map_and_eval((data / log.carmen).string(), "graph", relations);
+  const auto [bag_scans, bag_error] = map_and_eval((data / log.bag).string(), "graph", relations);
+  EXPECT_EQ(carmen_scans, log.scans);
+  EXPECT_EQ(bag_scans, log.scans);
+  EXPECT_LT(bag_error, log.allowed_ratio * carmen_error) << "bag " << bag_error << " m, CARMEN " << carmen_error << " m";
+}
+
+INSTANTIATE_TEST_SUITE_P(Kuemmerle2009, BagMapping,
+                         ::testing::Values(BagLog{"intel", "bags/ros1/intel.orig.bag", "intel/intel.clf.gz",
+                                                  "intel/intel.relations", 13631, 1.9},
+                                           BagLog{"aces", "bags/ros1/aces.orig.bag", "aces/aces.clf.gz",
+                                                  "aces/aces.relations", 7374, 1.1},
+                                           BagLog{"fr079", "bags/ros1/fr079.orig.bag", "fr079/fr079.clf.gz",
+                                                  "fr079/fr079.relations", 4934, 1.1}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+// The ROS 1 bag and its MCAP conversion give the identical trajectory.
+TEST(BagMapping, TheRos1BagAndItsMcapConversionGiveTheSameTrajectory) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
   test::TempDir ros1_out;
   test::TempDir mcap_out;
   for (const auto& [bag, out] : {std::pair{data / "bags/ros1/aces.orig.bag", &ros1_out},
                                  std::pair{data / "bags/ros2/aces_mcap", &mcap_out}}) {
-    const CommandResult map = run_command(
-        slam2d("map --quiet --json --method graph --out " + out->path().string() + " " + bag.string()));
+    const CommandResult map =
+        run_command(slam2d("map --quiet --method graph --out " + out->path().string() + " " + bag.string()));
     ASSERT_EQ(map.exit_code, 0) << map.errors;
-    EXPECT_EQ(json_number(map.output, "scans"), carmen_scans);
-    const CommandResult eval =
-        run_command(slam2d("eval --json " + out->file("trajectory.txt") + " --relations " + relations));
-    const double error = json_number(eval.output, "trans_mean").value_or(1e9);
-    EXPECT_LT(error, 1.1 * carmen_error) << bag << ": " << error << " m, CARMEN " << carmen_error << " m";
   }
-  EXPECT_EQ(read_text(ros1_out.file("trajectory.txt")), read_text(mcap_out.file("trajectory.txt")))
-      << "the ROS 1 bag and its MCAP conversion give the same trajectory";
-  EXPECT_EQ(carmen_scans, 7374.0);
+  EXPECT_EQ(read_text(ros1_out.file("trajectory.txt")), read_text(mcap_out.file("trajectory.txt")));
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 namespace slam2d {
 namespace {
 
+constexpr std::size_t kOdometryWindow = 64;     // recent readings kept for the interpolation
+constexpr std::size_t kMaxPendingScans = 256;  // scans held waiting for the odometry to pass them
 constexpr const char* kLaserScan = "sensor_msgs/LaserScan";
 constexpr const char* kOdometry = "nav_msgs/Odometry";
 constexpr const char* kImu = "sensor_msgs/Imu";
@@ -124,10 +126,7 @@ void BagLogReader::take(DecodedRecord record) {
       } else if (record.topic == choice_.odom_topic && transform.parent == choice_.odom_frame &&
                  transform.child == choice_.base_frame) {
         const OdometryReading reading{.stamp = transform.stamp, .pose = transform.T_parent_child};
-        odometry_.push_back(reading);
-        if (odometry_.size() > 2) odometry_.erase(odometry_.begin());
-        has_odometry_ = true;
-        release_scans_up_to(reading.stamp);
+        add_odometry(reading);
         ready_.push_back(OdometryMessage{reading, record.index});
       }
     }
@@ -136,12 +135,17 @@ void BagLogReader::take(DecodedRecord record) {
   if (auto* odometry = std::get_if<DecodedOdometry>(&record.message)) {
     if (choice_.base_frame.empty()) choice_.base_frame = odometry->child_frame_id.empty() ? "base_link" : odometry->child_frame_id;
     if (choice_.odom_frame.empty()) choice_.odom_frame = odometry->frame_id.empty() ? "odom" : odometry->frame_id;
-    odometry_.push_back(odometry->reading);
-    if (odometry_.size() > 2) odometry_.erase(odometry_.begin());
-    has_odometry_ = true;
-    release_scans_up_to(odometry->reading.stamp);
+    add_odometry(odometry->reading);
     ready_.push_back(OdometryMessage{odometry->reading, record.index});
   }
+}
+
+void BagLogReader::add_odometry(const OdometryReading& reading) {
+  odometry_.push_back(reading);
+  if (odometry_.size() > kOdometryWindow) odometry_.pop_front();
+  latest_odometry_stamp_ = has_odometry_ ? std::max(latest_odometry_stamp_, reading.stamp) : reading.stamp;
+  has_odometry_ = true;
+  release_scans_up_to(latest_odometry_stamp_);
 }
 
 void BagLogReader::add_static(const DecodedTransform& transform) {
@@ -159,16 +163,25 @@ void BagLogReader::resolve_mounting() {
 }
 
 std::optional<SE2> BagLogReader::odometry_at(double stamp) const {
-  if (odometry_.empty()) return std::nullopt;
-  const OdometryReading& last = odometry_.back();
-  if (odometry_.size() == 1 || stamp >= last.stamp) return last.pose;
-  const OdometryReading& before = odometry_.front();
-  if (stamp <= before.stamp || !(last.stamp > before.stamp)) return before.pose;
-  return interpolate(before.pose, last.pose, (stamp - before.stamp) / (last.stamp - before.stamp));
+  // The readings just before and just after `stamp` among the recent ones (the bag's order need
+  // not be time order: recorded logs with stamps that step back).
+  const OdometryReading* before = nullptr;
+  const OdometryReading* after = nullptr;
+  for (const OdometryReading& reading : odometry_) {
+    if (reading.stamp <= stamp && (before == nullptr || reading.stamp >= before->stamp)) before = &reading;
+    if (reading.stamp >= stamp && (after == nullptr || reading.stamp < after->stamp)) after = &reading;
+  }
+  if (before == nullptr && after == nullptr) return std::nullopt;
+  if (before == nullptr) return after->pose;
+  if (after == nullptr || !(after->stamp > before->stamp)) return before->pose;
+  return interpolate(before->pose, after->pose, (stamp - before->stamp) / (after->stamp - before->stamp));
 }
 
 void BagLogReader::release_scans_up_to(double stamp) {
-  while (!pending_scans_.empty() && pending_scans_.front().first.scan.stamp <= stamp) {
+  // In the bag's order: a scan waits for the odometry to pass its stamp (so that it can be
+  // interpolated), and never holds more than kMaxPendingScans behind it.
+  while (!pending_scans_.empty() &&
+         (pending_scans_.front().first.scan.stamp <= stamp || pending_scans_.size() > kMaxPendingScans)) {
     ready_.push_back(to_laser(pending_scans_.front().first, pending_scans_.front().second));
     pending_scans_.pop_front();
   }

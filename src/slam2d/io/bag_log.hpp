@@ -14,7 +14,8 @@
 //   carries the odometry on its own topic.
 // - Ranges as published: NaN, +-inf and values outside [range_min, range_max] are "no return"
 //   (LaserScan::is_valid), never errors.
-// Messages come out in time order: each odometry reading after the scans stamped before it.
+// Messages come out in the bag's order (each reader's: see its header), each scan once the
+// odometry has passed its stamp.
 
 #include <cstddef>
 #include <deque>
@@ -74,6 +75,7 @@ class BagLogReader {
   void release_scans_up_to(double stamp);
   LaserMessage to_laser(const DecodedScan& scan, std::size_t index) const;
   std::optional<SE2> odometry_at(double stamp) const;
+  void add_odometry(const OdometryReading& reading);
   void add_static(const DecodedTransform& transform);
   void resolve_mounting();  // T_base_laser from the static transforms seen so far
 
@@ -81,7 +83,8 @@ class BagLogReader {
   BagChoice choice_;
   std::vector<std::string> wanted_;
   std::vector<DecodedTransform> static_transforms_;
-  std::vector<OdometryReading> odometry_;  // the last two readings
+  std::deque<OdometryReading> odometry_;  // the recent readings, in the bag's order
+  double latest_odometry_stamp_ = 0.0;    // the largest odometry stamp so far
   std::deque<std::pair<DecodedScan, std::size_t>> pending_scans_;  // scans waiting for the next reading
   std::deque<SensorMessage> ready_;
   bool finished_ = false;

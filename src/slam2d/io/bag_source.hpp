@@ -4,7 +4,8 @@
 //
 // A container reader knows its file format and the wire encoding of its messages (ROS 1
 // serialization or CDR); it decodes the few message types slam2d needs into the plain structs
-// below and hands them over in time order (receive time, ties in file order). Everything that
+// below and hands them over in the bag's order (each reader says which: ROS 1 in the recording
+// order of the file, MCAP and rosbag2 in receive-time order, as ROS 2 writes them). Everything that
 // does not depend on the format (which topic is the laser, the laser's mounting from /tf_static,
 // the odometry pose at each scan, "no return" readings) lives once, in the assembly.
 
@@ -78,8 +79,8 @@ struct DecodedRecord {
   DecodedMessage message = {};
 };
 
-/// A container reader: the bag's topics, and its messages of the wanted topics decoded, in time
-/// order. Errors are Error("PATH: message") (a truncated chunk, a wrong CRC, an unknown
+/// A container reader: the bag's topics, and its messages of the wanted topics decoded, in the
+/// bag's order (above). Errors are Error("PATH: message") (a truncated chunk, a wrong CRC, an unknown
 /// compression, a message running past its record), never a crash; sizes read from the file are
 /// checked before anything is allocated.
 class BagSource {

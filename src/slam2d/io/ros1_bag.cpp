@@ -228,7 +228,7 @@ class Ros1Bag final : public BagSource {
     }
   }
 
-  // The messages of `wanted` in time order (ties in file order), after the last one yielded
+  // The messages of `wanted` in the recording (file) order, after the last one yielded
   // when the wanted topics change on the way; which chunk is needed until when.
   void plan(const std::vector<std::string>& wanted) {
     const std::set<std::string> names(wanted.begin(), wanted.end());
@@ -249,7 +249,6 @@ class Ros1Bag final : public BagSource {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
       if (types_[entries_[i].connection] && (!last_yielded_ || comes_after(i, *last_yielded_))) queue_.push_back(i);
     }
-    std::ranges::stable_sort(queue_, {}, [this](std::size_t i) { return entries_[i].time_ns; });
     last_use_.assign(chunks_.size(), 0);
     chunk_order_.clear();
     for (std::size_t q = 0; q < queue_.size(); ++q) {
@@ -266,7 +265,7 @@ class Ros1Bag final : public BagSource {
   }
 
   bool comes_after(std::size_t a, std::size_t b) const {
-    return std::pair(entries_[a].time_ns, a) > std::pair(entries_[b].time_ns, b);
+    return a > b;  // file order
   }
 
   // A chunk's records, decompressed. Chunks are decompressed on worker threads, in the order the
@@ -337,7 +336,7 @@ class Ros1Bag final : public BagSource {
   bool started_ = false;
   std::vector<std::string> wanted_;
   std::vector<std::optional<ros1::MessageType>> types_;  // per connection, when wanted
-  std::vector<std::size_t> queue_;                        // entries_ indices, in time order
+  std::vector<std::size_t> queue_;                        // entries_ indices, in file order
   std::size_t next_ = 0;
   std::optional<std::size_t> last_yielded_;
   std::vector<std::size_t> last_use_;  // per chunk: 1 + the queue position of its last message

@@ -15,8 +15,10 @@ namespace slam2d {
 bool is_ros1_bag(const std::string& path);
 
 /// Opens a ROS 1 bag and reads its index (connections, chunk infos, each chunk's index data).
-/// Messages come out in receive-time (record time) order, ties in file order; each chunk is
-/// decompressed once, when first needed, and dropped after its last wanted message.
+/// Messages come out in the recording order of the file (rosbag writes them as they arrive): not
+/// sorted by stamp, since a log whose stamps step back (the Intel bag: scans up to 0.9 s out of
+/// order) would be scrambled. Each chunk is decompressed once, when first needed, and dropped after
+/// its last wanted message.
 /// Throws Error("PATH: ...") for a file that is not a v2.0 bag, has no index (a bag left unclosed:
 /// `rosbag reindex` repairs it), or whose records are inconsistent.
 std::unique_ptr<BagSource> open_ros1_bag(const std::string& path);
