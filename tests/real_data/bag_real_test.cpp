@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -52,6 +53,26 @@ std::pair<double, double> map_and_eval(const std::string& log, const std::string
       run_command(slam2d("eval --json " + out.file("trajectory.txt") + " --relations " + relations));
   EXPECT_EQ(eval.exit_code, 0) << eval.errors;
   return {json_number(map.output, "scans").value_or(-1.0), json_number(eval.output, "trans_mean").value_or(1e9)};
+}
+
+// Bad bags on the command line: a missing topic and a truncated file name the bag, exit 1, write nothing.
+TEST(BagCli, AMissingTopicOrATruncatedBagIsAnErrorNamingItWithoutOutput) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
+  test::TempDir dir;
+  const std::string bag = (data / "bags/ros1/aces_head_lz4.bag").string();
+  const CommandResult missing =
+      run_command(slam2d("map --quiet --method graph --scan-topic /nope --out " + dir.file("a") + " " + bag));
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.errors.find(bag + ": no topic /nope"), std::string::npos) << missing.errors;
+  EXPECT_NE(missing.errors.find("/scan"), std::string::npos) << "names the candidates: " << missing.errors;
+  const std::string text = read_text(bag);
+  const std::string truncated = dir.file("truncated.bag");
+  std::ofstream(truncated, std::ios::binary) << text.substr(0, text.size() / 2);
+  const CommandResult cut = run_command(slam2d("map --quiet --method graph --out " + dir.file("b") + " " + truncated));
+  EXPECT_EQ(cut.exit_code, 1);
+  EXPECT_EQ(cut.errors.rfind(truncated + ": ", 0), 0u) << cut.errors;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("a")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("b")));
 }
 
 struct BagLog {
