@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # slam2d: the two set-up commands (see README.md) and a few conveniences.
 #   make demo   install dependencies, build, run the demo on the simulated office world
 #   make test   install dependencies, build, run every test

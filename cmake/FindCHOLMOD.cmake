@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds CHOLMOD (SuiteSparse) as Debian's libsuitesparse-dev installs it (no CMake package there):
 # headers in <prefix>/include/suitesparse, libcholmod and its SuiteSparse companions.
 # Defines the imported target CHOLMOD::CHOLMOD.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # One helper declares every slam2d target, so C++20 and warnings are set in one place.
 
 function(slam2d_set_warnings target)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs slam2d's build and test dependencies from Debian 12 packages.
 # Idempotent: silent and quick when everything is already present.
 set -euo pipefail

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The slam2d subcommands. Each add_*_command registers its options on the app and the action
 // to run; actions throw slam2d::Error on bad input and main() turns that into a message and exit 1.

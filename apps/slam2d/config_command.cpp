@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d config list|dump NAME|table NAME|docs: the settings of every method and matcher, from
 // their field tables (core/config_fields.hpp). `dump` prints a preset with the defaults, which
 // `map --config`, `localize --config` and `--matcher` read back; `docs` prints

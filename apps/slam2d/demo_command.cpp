@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d demo: simulate the office world, map it (--method, odometry by default), and score the
 // trajectory against the truth.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d eval TRAJ (--relations FILE | --reference TRAJ): accuracy of a trajectory.
 
 #include <fmt/core.h>

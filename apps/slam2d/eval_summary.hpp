@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Error figures added to a JSON summary; shared by `eval` and `demo`.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d info FILE: what a CARMEN log, a map (YAML) or a pose graph (g2o/TORO) holds. For a log,
 // the FLASER/RLASER geometry the reader decided, per laser and beam count, with where each value
 // came from (docs/sensor_geometry.md).

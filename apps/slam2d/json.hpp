@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A minimal JSON object writer for --json summaries: flat or nested objects of numbers, strings,
 // booleans and nulls. Numbers are written in their shortest exact form; NaN and inf become null.

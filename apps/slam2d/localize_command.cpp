@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d localize LOG --map MAP.yaml --method markov|ekf|mcl|hybrid: localization in a known map
 // (src/slam2d/localization, docs/methods/localization.md), one trajectory line per front-laser
 // scan, and a summary with the convergence and recovery times and the cost per update.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d: 2D LiDAR scan matching, localization and SLAM from the command line.
 
 #include <CLI/CLI.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d map LOG --method METHOD --out DIR: build a map and a trajectory from a log.
 
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The mapping job behind `slam2d map` (and `slam2d demo`): read a log, estimate the trajectory
 // with the chosen method, build the occupancy grid, write the outputs.

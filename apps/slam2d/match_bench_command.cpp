@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d match-bench LOG --matchers a,b,c: the scan-matching protocol of F. Pomerleau et al.,
 // "Comparing ICP variants on real-world data sets", Autonomous Robots 34(3), 2013, on a 2D log:
 // pairs of scans a fixed distance apart, their true relative pose from a reference trajectory,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d odometry LOG --matcher NAME --out TRAJ: scan-to-scan odometry over a whole log with any
 // matcher (registration/scan_odometry.hpp), one trajectory line per front-laser scan.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What the odometry guard (core/odometry_guard.hpp) found, as summary.json reports it for every
 // method that reads wheel odometry.

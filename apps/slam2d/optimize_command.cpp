@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d optimize GRAPH --out OUT: sparse pose adjustment (Konolige et al. 2010,
 // src/slam2d/optim/sparse_pose_adjustment.hpp) of a g2o or TORO pose graph from its own initial
 // guess; the output format follows OUT's extension (.g2o or .graph, optionally .gz).

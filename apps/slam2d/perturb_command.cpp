@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d perturb LOG --out LOG2 --fault KIND[:key=value,...] ... --seed N: a CARMEN log with
 // injected faults (sim/fault_injection.hpp, docs/faults.md), written atomically.
 

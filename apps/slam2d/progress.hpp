@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Progress line on stderr for long runs: shown only on a terminal, not with --quiet, and only once
 // a run has lasted half a second; redrawn at most ten times a second.

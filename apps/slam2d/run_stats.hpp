@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CPU time, wall time and peak memory of the running process, for summaries and benchmarks.
 

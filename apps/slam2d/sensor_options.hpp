@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The reader options shared by every command that reads a CARMEN log (info, map, localize,
 // odometry, match-bench): the sensor-geometry overrides --fov, --angle-min, --angle-increment in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d simulate --out LOG: a CARMEN log (and its ground truth) from the built-in simulated world.
 
 #include <cstdio>

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Leave-one-out check of one setting over the public logs (docs/defaults.md).
 
 For every value of a grid and every log (intel, aces, fr079) runs one slam2d command, then

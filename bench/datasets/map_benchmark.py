@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Mapping benchmark on the raw logs of Kuemmerle et al. 2009 (intel, aces, fr079).
 
 For each log (and each mode: with and without odometry) this runs

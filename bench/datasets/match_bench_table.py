@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Scan-matcher benchmark on SLAM-corrected logs (the protocol of Pomerleau et al. 2013).
 
 For each log this runs

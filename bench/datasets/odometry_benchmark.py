@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Scan-to-scan odometry benchmark on the raw logs of Kuemmerle et al. 2009 (intel, aces, fr079).
 
 For each matcher and log this runs

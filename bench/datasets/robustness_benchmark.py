@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Robustness benchmark: how methods degrade under injected faults (docs/faults.md).
 
 Public logs (default): for each log (intel, aces, fr079) x each fault at two severities (the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Real scans for the micro benchmarks: the first scans of $SLAM2D_DATA/<log>/<log>.clf.gz
 // (default ../shared/data), read once. Empty when the data is absent; benchmarks then skip.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of correlative scan matching (Olson 2009, src/slam2d/registration/correlative.*):
 // issue 3's case, a simulated 1080-beam, 270 deg scan pair in the office matched over a +-0.5 m,
 // +-20 deg window at 1 cm / 0.25 deg, per search mode (the exhaustive search on that window takes

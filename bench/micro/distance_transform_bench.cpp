@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of the distance transform (Felzenszwalb and Huttenlocher 2012), the likelihood
 // field (Thrun et al. 2005, Table 6.3) and the max-pooled pyramid (Cartographer's
 // PrecomputationGrid2D): src/slam2d/grid/{distance_transform,likelihood_field,max_pool_pyramid}.

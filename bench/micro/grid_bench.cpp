@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of the occupancy grid (src/slam2d/grid): scan integration, copies, export.
 
 #include <benchmark/benchmark.h>

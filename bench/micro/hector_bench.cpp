@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of Hector SLAM (Kohlbrecher et al. 2011; src/slam2d/slam/hector): bilinear map
 // sampling, one scan-to-pyramid match, and the whole loop per scan on the simulated office run.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of the ICP family on real data: point-to-point ICP and its accelerated form
 // (Besl & McKay 1992, registration/icp.*), trimmed ICP (Chetverikov 2002, trimmed_icp.*),
 // point-to-plane (Low 2004, point_to_plane.*) and PL-ICP (Censi 2008, pl_icp.*, with its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of Lu & Milios 1997 (registration/idc.*, registration/tangent_search.*):
 // IMRP, IDC and the tangent-based rotation search on consecutive 180-beam Intel scans, single
 // thread, the guess from odometry in the sensor frames:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Localization micro benchmarks: one filter update (motion, sensor, resampling) of MCL with 5000
 // particles and 60 beams per scan, of the EKF with its scan-to-map match, and of the Markov grid
 // while tracking, on the simulated office (180-beam scans, the ground-truth map at 5 cm).

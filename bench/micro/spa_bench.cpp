@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Sparse pose adjustment (Konolige et al. 2010, src/slam2d/optim/sparse_pose_adjustment.*) on the
 // public pose graphs of $SLAM2D_DATA/posegraphs (default ../shared/data), each from its own
 // initial guess, one fresh optimisation per benchmark iteration; and the SLAM pattern on M3500: one

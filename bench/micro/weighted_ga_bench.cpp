@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Micro benchmarks of matchers as the CLI runs them, by preset file or registry name
 // (matcher_registry.hpp):
 // - the Boolean / soft-weighted ICP (six-step framework, Rusinkiewicz & Levoy 2001;

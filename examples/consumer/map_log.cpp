@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Map a log: graph SLAM over a CARMEN log, the trajectory written as "t x y theta" lines.
 //   map_log LOG.clf[.gz] TRAJECTORY.txt
 #include <cstdio>

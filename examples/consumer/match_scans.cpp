@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Match two scans: two simulated scans of the office world, 0.3 m and 0.1 rad apart, matched
 // with PL-ICP from the identity. Prints the recovered motion; exits 1 if it is off by more than
 // 1 cm or 0.5 degrees.

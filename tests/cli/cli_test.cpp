@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The slam2d command line: outputs on simulated data, and bad input giving one clear
 // "PATH:LINE: message", a non-zero exit and no output files.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d localize: a simulated office log localized in the map built from it, from a known start
 // and after a kidnap, the JSON summary's fields, the EKF refusing --global, and bad options
 // giving a message and a non-zero exit without a trajectory.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d optimize: a small inconsistent g2o loop optimised and written back (g2o, TORO, gzip), the
 // written poses scoring the reported chi2, edges-only input, and bad input giving "PATH:LINE:",
 // a non-zero exit and no output.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // slam2d perturb: faults from the command line on a simulated log: the JSON summary counts what
 // changed, the same seed gives the same bytes and another seed other bytes, gzip output, the
 // geometry read back by `slam2d info`, and bad specs exit 1 with a reason and no output file.

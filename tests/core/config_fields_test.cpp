@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The config field tables (core/config_fields.hpp) of the core, grid, optim, sim, eval,
 // localization and slam configs: check_fields() holds each number to its range and names the
 // field's path; a YAML dump (io/config_text.hpp) reads back (io/config_file.hpp) to the same

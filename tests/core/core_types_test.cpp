@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Angles, LaserScan conversion, covariance helpers, trajectories, RNG and errors.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The odometry guard (core/odometry_guard.hpp): stalls, their catch-up, jumps and gaps are
 // found in hand-made odometry streams, and clean odometry is passed through untouched.
 

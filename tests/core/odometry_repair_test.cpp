@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ReverseOdometryRepair on hand-made odometry: FR079 integrates reversing as forward driving.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SE2: group identities and every Jacobian against central finite differences.
 
 #include "slam2d/core/se2.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of the absolute trajectory error (Sturm et al. 2012) and the closed-form 2D alignment.
 
 #include "slam2d/eval/ate.hpp"

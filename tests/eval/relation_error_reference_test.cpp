@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Cross-check of the C++ relation error (Kuemmerle et al. 2009) against the independent Python
 // implementation in tools/relation_error_reference.py, on a generated trajectory and relations.
 

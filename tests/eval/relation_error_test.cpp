@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of the relation error of Kuemmerle et al. 2009 on hand-computed cases.
 
 #include "slam2d/eval/relation_error.hpp"

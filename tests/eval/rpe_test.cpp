@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of the relative pose error (Sturm et al. 2012) with time and distance windows.
 
 #include "slam2d/eval/rpe.hpp"

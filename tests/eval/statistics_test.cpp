@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of the error statistics shared by the evaluation metrics.
 
 #include "slam2d/eval/statistics.hpp"

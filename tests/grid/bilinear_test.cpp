@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Bilinear interpolation of Kohlbrecher et al. 2011, Eq. (4)-(6): exact at cell centres,
 // continuous across cells, exact on linear fields, gradient equal to finite differences of the
 // interpolated value, and the occupancy-grid fast path equal to the generic one.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Exact squared Euclidean distance transform (Felzenszwalb and Huttenlocher 2012) against brute force.
 
 #include "slam2d/grid/distance_transform.hpp"

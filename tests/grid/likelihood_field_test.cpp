@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Likelihood field (Thrun et al. 2005, Table 6.3): distances against brute force, the gradient
 // against finite differences and the true direction, hand-computed likelihoods, and the scan
 // log-likelihood peaking at the true pose of a simulated scan.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The multi-resolution map of Kohlbrecher et al. 2011, Sec. IV-C: level k at resolution r 2^k,
 // every level updated from the scans themselves (not downsampled from level 0).
 

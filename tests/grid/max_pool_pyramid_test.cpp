@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Max-pooled pyramid (Olson 2009; Cartographer's PrecomputationGrid2D) against brute-force
 // maxima over windows, and the van Herk / Gil-Werman sliding maximum against brute force.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The occupancy grid on real data: the SLAM-corrected Intel Research Lab log (shared/data,
 // intel/intel-corrected.log.gz, 910 scans of 180 beams, poses corrected by a particle filter).
 

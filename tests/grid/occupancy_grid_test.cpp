@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // OccupancyGrid: ray casting updates, no-return beams, invalid readings, copy-on-write, export.
 
 #include "slam2d/grid/occupancy_grid.hpp"

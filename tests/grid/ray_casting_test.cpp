@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Bresenham ray casting against a brute-force reference.
 
 #include "slam2d/grid/ray_casting.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render_map: cell colours, trajectory polyline and markers.
 
 #include "slam2d/grid/render.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // TiledGrid: growth, default reads, bounding box, copy-on-write, and copies that share tiles
 // written from several threads at once.
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The installed package as another project sees it: `cmake --install` the build tree into a
 # fresh prefix, build examples/consumer against that prefix alone (find_package(slam2d)), run its
 # two programs (match two scans; graph SLAM over a simulated log from the installed tool) and

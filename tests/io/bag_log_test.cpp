@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The bag assembly (io/bag_log.hpp) over a hand-made BagSource: topic choice, the laser's mounting
 // from the static transforms, the odometry interpolated at each scan, /tf as the odometry, time
 // order, and "no return" readings passed through as published.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests for the CARMEN log reader and writer (src/slam2d/io/carmen_*.cpp) on the hand-written
 // logs in tests/fixtures/carmen.
 

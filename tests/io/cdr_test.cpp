@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The CDR decoder on hand-made buffers: one LaserScan written byte by byte, in both byte orders,
 // and cut short at every length.
 

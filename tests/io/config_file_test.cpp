@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ConfigNode: typed reads, errors naming file and line, misspelt keys rejected.
 
 #include "slam2d/io/config_file.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of the ROS map_server format reader/writer (src/slam2d/io/map_io.cpp).
 
 #include "slam2d/io/map_io.hpp"

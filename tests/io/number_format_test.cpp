@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Shortest exact number formatting and strict token parsing.
 #include "slam2d/io/detail/number_format.hpp"
 

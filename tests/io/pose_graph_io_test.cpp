@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Pose graph files (g2o and TORO): hand-computed parse, exact round trips, malformed input.
 #include "slam2d/io/pose_graph_io.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Relations files (Kuemmerle et al. 2009): hand-computed parse, exact round trips, malformed input.
 #include "slam2d/io/relations.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ROS 1 bag reader: hand-computed message decodes, the real bags of ../shared/data/bags (counts,
 // order, sampled values from checks/*.inspect.json, the lz4/none variants) and corrupted copies.
 

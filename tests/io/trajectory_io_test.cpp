@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Trajectory files (slam2d text and TUM): hand-computed parse, exact round trips, malformed input.
 #include "slam2d/io/trajectory_io.hpp"
 

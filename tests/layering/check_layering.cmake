@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # The layering of STYLE.md, checked on the sources: no file of a module includes a header of a
 # module it may not see, and no public header includes an internal one (a module's detail/, which
 # is not installed). Run as `cmake -DSOURCE_DIR=<repo> -P check_layering.cmake`; fails with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Global localization in a building four times the simulated office: four copies of the office
 // floor in a row (120 m x 20 m, ~2000 m^2 of free space), joined by doors, each copy with its own
 // seeded crates. The copies are look-alikes: from the south corridor where the robot starts, the

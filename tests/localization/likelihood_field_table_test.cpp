@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The likelihood-field table of LocalizationMap (tiled, with a border) against the field itself.
 
 #include <gtest/gtest.h>

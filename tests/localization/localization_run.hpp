@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One localizer driven over a simulated run by a LocalizationSession, with the error of every
 // step against the simulator's truth (shared by the localization tests).

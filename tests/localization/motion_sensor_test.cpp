@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The localization models: the odometry motion model's Jacobians against finite differences, its
 // samples against its covariance, the KLD bound, the beam model's ray casting on a hand-made map,
 // and the scan-to-map matcher recovering a known offset.

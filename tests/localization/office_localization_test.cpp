@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Every localization method in the simulated office (the ground-truth map of its walls): tracking
 // from a known start, global localization (MCL, Markov, hybrid), recovery after a kidnap (MCL),
 // and the EKF reporting itself lost instead of drifting after one.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Presets and the field tables behind them: every file in configs/ is read and valid, the method
 // presets hold exactly the library defaults, a dump reads back to the same fields, a value in a
 // preset reaches the config, bad presets are refused at their line, and docs/configuration.md is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The shared least-squares layer: robust kernel weights against the derivative of their cost,
 // normal equations against an explicit stacked Jacobian, the Gauss-Newton step against the exact
 // linear least-squares solution, and Levenberg-Marquardt recovering known curve parameters.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The pose graph: the g2o edge error against its definition t2v(Z^-1 (X_i^-1 X_j)), its analytic
 // Jacobians against central differences, and files turned into graphs and back (hand-written
 // fixtures in both formats, edges-only files whose poses are composed along the edges).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Sparse pose adjustment (Konolige et al. 2010): consistent graphs come back to their truth from a
 // perturbed guess; an inconsistent loop agrees with a dense Gauss-Newton reference built here from
 // the SE2 group operations and numeric Jacobians; fixed nodes stay put; a false loop closure bends

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The real logs as bags (../shared/data/bags, written by third-party tools): `slam2d info` on a
 // bag, and `slam2d map` on a bag against the same log's CARMEN file: the same scans and a relation
 // error close to the CARMEN run's (the bags spread the beams over exactly 180 deg and carry the

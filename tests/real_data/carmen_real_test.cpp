@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The CARMEN reader on the real logs in $SLAM2D_DATA: message counts, beams and durations from
 // $SLAM2D_DATA/README.md, Intel's backwards timestamps, exact write -> read of a whole log.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The command line on the real logs of Kuemmerle et al. 2009 (intel, aces, fr079): `info` counts,
 // odometry mapping with one trajectory line per scan, and `eval` agreeing with the independent
 // Python implementation of the relation metric in tools/relation_error_reference.py.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Real relations files (Kuemmerle et al. 2009) and public pose graphs: counts from
 // $SLAM2D_DATA/README.md, hand-checked first lines, exact write -> read on the big graphs.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The FLASER geometry check (docs/sensor_geometry.md) on every CARMEN log in $SLAM2D_DATA: each
 // one gets a consistent 180 deg geometry without a warning, and a corrected log whose PARAM lines
 // are rewritten in radians gives the same scans as the original.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Graph SLAM (slam/graph) on the ACES log of Kuemmerle et al. 2009, the default configuration:
 // loops are closed, and the relation error stays under bounds a little above what was measured
 // (0.0370 m, 0.344 deg; bench/BENCHMARKS.md has every log), far under Hector's 0.095 m on it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Hector SLAM (Kohlbrecher et al. 2011) on the raw logs of Kuemmerle et al. 2009: the relation
 // error of the library's default configuration, with and without odometry, against the
 // 'scan matching' column of that paper (Intel 0.220 m, ACES 0.173 m, FR079 0.258 m). The bounds

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Localization on the Intel Research Lab log (Kuemmerle et al. 2009): the map is built from the
 // SLAM-corrected log (scans at their corrected poses, as `slam2d map --method odometry` does),
 // then the raw log is localized in it. The EKF tracks the first 5000 scans from a known start

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The odometry guard (core/odometry_guard.hpp) on the raw logs of Kuemmerle et al. 2009 with the
 // fault found on a held-out log of the same benchmark injected (sim/fault_injection.hpp): the
 // odometry freezes for 1.2 s every 60 s while the robot drives on, then catches up in one step.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Rao-Blackwellized particle filter SLAM (slam/rbpf) on the FR079 log of Kuemmerle et al. 2009,
 // the cheapest log that still shows the point: 5 particles (about 12 s of CPU) beat the RBPF
 // column of that paper (FR079 0.061 m), and one seed gives one trajectory. The 30-particle figures

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The ROS 2 readers (MCAP, rosbag2 sqlite3) on the real bags of shared/data/bags/ros2 (README §3,
 // §4, §6): counts, order, the same decoded messages from every storage of one log, the driver-style
 // ranges of the variants, and corrupted copies that must be errors naming the file.

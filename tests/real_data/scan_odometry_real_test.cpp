@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Scan-to-scan odometry with PL-ICP (Censi 2008) on the raw logs of Kuemmerle et al. 2009, with
 // the defaults of `slam2d odometry --matcher pl-icp`: the relation error must beat the log's own
 // wheel odometry on every log and, on Intel, CSM's sm2 with default parameters (0.824 m). The

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // One battery for every matcher of the registry (STYLE.md: a new variant gets the whole suite):
 // known transforms recovered from simulated scan pairs under noise, forward and inverse; an
 // honest covariance; the corridor flagged degenerate and the room not; empty input refused;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Correlative scan matching (Olson 2009; src/slam2d/registration/correlative.*): the lookup table
 // against hand-computed values and brute-force pooling, the fast searches against the exhaustive
 // one, recovery of known transforms, covariance and degeneracy, errors.

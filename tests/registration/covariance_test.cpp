@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Censi's closed-form ICP covariance against the Monte-Carlo spread of the estimate: the
 // normalised estimation error squared (NEES) over many noisy trials lies within the chi-square
 // bounds for three degrees of freedom.

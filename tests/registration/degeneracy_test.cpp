@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Degeneracy from the Fisher information: the corridor and the circular room are flagged, with
 // the right weak direction; rooms with corners are not.
 

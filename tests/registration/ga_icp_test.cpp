@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // GA + ICP hybrid (Martinez et al. 2006, src/slam2d/registration/ga_icp.hpp).
 #include "slam2d/registration/ga_icp.hpp"
 

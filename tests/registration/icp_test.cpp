@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Point-to-point ICP (Besl & McKay 1992, src/slam2d/registration/icp.*) and its closed-form
 // solvers (closed_form.*): SVD and quaternion agree and minimise the squared distances; known
 // transforms are recovered from simulated scan pairs, forward and inverse; accelerated ICP

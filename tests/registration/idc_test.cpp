@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // IMRP and IDC (Lu & Milios 1997, registration/idc.*): known transforms recovered from simulated
 // scan pairs forward and inverse, a large rotation where closest-point ICP falls short, the range
 // rule's rotation under a translation error, the building blocks against brute force and hand

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // KdTree2 against brute force on random points.
 
 #include "slam2d/registration/kd_tree.hpp"

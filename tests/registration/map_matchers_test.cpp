@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // One battery for every scan-to-map matcher (STYLE.md: a new variant gets the whole suite): each
 // row of kMapMatchers builds its own map type (Hector's occupancy pyramid, the likelihood field,
 // the correlative point map) of a simulated world from scans at known poses, and the same cases

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Normal estimation: lines give their perpendicular, facing the sensor; both estimators agree.
 
 #include "slam2d/registration/normals.hpp"

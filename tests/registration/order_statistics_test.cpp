@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // BucketSelector (order_statistics.hpp), the exact two-rank selection behind PL-ICP's trimming,
 // against a sorted copy: every pair of ranks of value sets built to stress the buckets (ties,
 // zeros, values below and above the bucketed range, all in one bucket).

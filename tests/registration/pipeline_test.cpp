@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The modular ICP pipeline (src/slam2d/registration/pipeline*.hpp): each data and outlier filter
 // on hand-made clouds with hand-computed outcomes, the stages against brute force, every preset
 // configs/pipeline*.yaml on simulated pairs (forward and inverse), YAML errors, code vs YAML.

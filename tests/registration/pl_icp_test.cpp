@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // PL-ICP (Censi 2008): the exact closed-form step against a numerical minimum, the quartic
 // solver against the companion matrix, the projective search against brute force and the
 // kd-tree, known transforms recovered forward and inverse, and the point-to-line metric's

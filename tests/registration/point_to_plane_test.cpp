@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Point-to-plane ICP by linear least squares (Low 2004, src/slam2d/registration/point_to_plane.*
 // and solve_point_to_plane in closed_form.*): the small-angle linear step against the exact
 // point-to-line minimiser (Censi 2008's closed form, pl_icp.hpp), known transforms recovered

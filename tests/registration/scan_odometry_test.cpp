@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Scan-to-scan odometry (keyframes as CSM's ROS laser_scan_matcher): its bookkeeping with scripted
 // matchers (frames, keyframes, the constant-velocity guess, the gate), and on a simulated run with
 // PL-ICP it tracks the truth better than the drifting wheel odometry.

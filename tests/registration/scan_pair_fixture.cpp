@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "scan_pair_fixture.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated scan pairs with a known relative pose, for every matcher's tests: two scans of a
 // world taken from T_world_target and T_world_source = T_world_target * T_target_source, both in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The tangent-based rotation search (Lu & Milios 1997 Sec. 3, registration/tangent_search.*):
 // known transforms forward and inverse, a 0.5 rad turn from the identity guess, the histogram
 // search alone on a hand-made turned copy, the corridor flagged, refusals, the preset reader.

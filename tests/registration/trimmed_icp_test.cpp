@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Trimmed ICP (Chetverikov et al. 2002, src/slam2d/registration/trimmed_icp.*): known transforms
 // recovered from simulated scan pairs, forward and inverse; with 30% of the source replaced by
 // outliers it recovers the pose where plain ICP does not, and the estimated overlap keeps about

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Boolean and soft-weighted ICP (src/slam2d/registration/weighted_icp.hpp).
 #include "slam2d/registration/weighted_icp.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Fault injection (sim/fault_injection.hpp) on a simulated office run: each fault changes what it
 // says and nothing else (stall windows, removed lines, re-integrated odometry against closed
 // forms, every third scan), seeds give identical or different logs, bad specs are refused, and

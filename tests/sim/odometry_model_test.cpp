@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The odometry error model: systematic errors by hand, noise variances against the formulas.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The route follower on a plain square: it drives laps, keeps its limits and stays on the route.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The simulator: determinism, message layout, the true path, the laser against the world, the
 // odometry drift, and the written log read back.
 

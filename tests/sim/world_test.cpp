@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Worlds: ray casting against hand-computed distances, the grid ray caster against brute force,
 // and the office floor plan (route clearance, closure, rasterized map).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One field table per config struct. Beside each config struct stands one function that names
 // every field once, with its unit, allowed range and meaning:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // 3x3 covariance helpers for poses (x, y, theta): m^2, m*rad, rad^2.
 

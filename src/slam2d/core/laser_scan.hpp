@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // LaserScan: one sweep of a planar range finder, in the shape of ROS's sensor_msgs/LaserScan.
 

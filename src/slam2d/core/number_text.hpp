@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Numbers as text: written in the shortest form that reads back to the same double
 // (std::to_chars), and read strictly (std::from_chars): a token must be a number and nothing

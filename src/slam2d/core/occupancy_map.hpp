@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OccupancyMap: a finished map as a plain value, in the convention of ROS's nav_msgs/OccupancyGrid.
 // Cells are row-major with row 0 at the bottom (smallest y); `origin` is the pose of the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Wheel odometry: the robot's dead-reckoned pose in the odometry frame.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The odometry layer every method reads wheel odometry through: it checks each scan-to-scan
 // odometry increment before a method trusts it, so that no motion is ever counted twice.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Repair of odometry that integrates reverse driving as forward driving.
 //

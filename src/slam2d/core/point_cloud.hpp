@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PointCloud2: 2D points with optional per-point normals and weights.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A 2D pose graph as a g2o or TORO file lists it: vertices and edges by id, in file order, the
 // ids a FIX line names. What io/pose_graph_io.hpp reads and writes and optim/pose_graph.hpp turns

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A relation of Kuemmerle et al. 2009, "On measuring the accuracy of SLAM algorithms": the
 // robot's pose at t2 in the frame of its pose at t1, what eval/relation_error.hpp scores a

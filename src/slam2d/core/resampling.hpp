@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Resampling for particle filters (the RBPF's selective resampling, MCL's draws): G. Grisetti, C. Stachniss, W. Burgard, "Improved
 // techniques for grid mapping with Rao-Blackwellized particle filters", IEEE T-RO 23(1), 2007,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Seeded random numbers that give the same sequence on every platform and standard library:
 // std::mt19937_64's output is fixed by the standard, the distributions here are our own.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/core/scan_preprocessing.hpp"
 
 #include <algorithm>

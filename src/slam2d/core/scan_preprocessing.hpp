@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan preprocessing for Hector SLAM (S. Kohlbrecher, O. von Stryk, J. Meyer, U. Klingauf, "A
 // flexible and scalable SLAM system with full 3D motion estimation", SSRR 2011, Sec. III and

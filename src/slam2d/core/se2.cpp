@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/core/se2.hpp"
 
 #include <Eigen/LU>

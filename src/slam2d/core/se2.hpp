@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // SE2: a rigid motion in the plane, as a small value type.
 //

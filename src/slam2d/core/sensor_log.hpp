@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The format-neutral sensor log: what every log reader produces (io/carmen.hpp today) and what
 // the simulator, the fault injector and every method consume. Scans with the odometry pose at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Trajectory: stamped poses, kept in the order they were added (real logs may go back in time).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Relation-based error metric of R. Kuemmerle, B. Steder, C. Dornhege, M. Ruhnke, G. Grisetti,
 // C. Stachniss, A. Kleiner: "On measuring the accuracy of SLAM algorithms", Autonomous Robots

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Relative pose error (RPE) of J. Sturm, N. Engelhard, F. Endres, W. Burgard, D. Cremers:
 // "A benchmark for the evaluation of RGB-D SLAM systems", IROS 2012, Sec. VI-B, Eq. (1)-(2), in

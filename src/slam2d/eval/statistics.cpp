@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/eval/statistics.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Summary statistics of error samples, shared by the evaluation metrics (relation error of
 // Kuemmerle et al. 2009, ATE and RPE of Sturm et al. 2012).

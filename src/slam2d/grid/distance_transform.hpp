@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Exact squared Euclidean distance transform in linear time: P. Felzenszwalb and D. Huttenlocher,
 // "Distance Transforms of Sampled Functions", Theory of Computing 8, 2012.

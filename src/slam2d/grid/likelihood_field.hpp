@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The likelihood field of a map: S. Thrun, W. Burgard, D. Fox, "Probabilistic Robotics", 2005,
 // Section 6.4, Table 6.3 (likelihood_field_range_finder_model). Each beam end point is scored by

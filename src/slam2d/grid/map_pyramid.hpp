@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Multi-resolution occupancy maps: S. Kohlbrecher et al., "A flexible and scalable SLAM system
 // with full 3D motion estimation", SSRR 2011, Sec. IV-C. Level k has resolution r 2^k; every level

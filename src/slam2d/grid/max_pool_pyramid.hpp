@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Max-pooled pyramid of a score grid, the bounds of correlative branch-and-bound matching:
 // E. Olson, "Real-time correlative scan matching", ICRA 2009 (the low-resolution maximum map), in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Occupancy grid mapping in log-odds form: H. Moravec and A. Elfes, "High resolution maps from
 // wide angle sonar", ICRA 1985; S. Thrun, W. Burgard, D. Fox, "Probabilistic Robotics", 2005,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Ray casting on a grid: J. E. Bresenham, "Algorithm for computer control of a digital plotter",
 // IBM Systems Journal 4(1), 1965. Integer arithmetic only.

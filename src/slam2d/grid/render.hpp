@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Rendering of an occupancy map and a trajectory as an RGB picture (the CLI's map.png).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // TiledGrid: an unbounded 2D grid of cells that grows as cells are written.
 //

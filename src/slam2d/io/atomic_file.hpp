@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Atomic output: everything is written to a temporary file beside the target and renamed over
 // it on commit(), so a failed run never leaves a half-written file.

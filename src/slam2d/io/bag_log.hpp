@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Any bag (ROS 1, MCAP, rosbag2) as the format-neutral sensor log (core/sensor_log.hpp): the one
 // assembly behind every container reader (io/bag_source.hpp).

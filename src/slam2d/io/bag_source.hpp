@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The contract between a bag container reader (ROS 1 bag v2.0, MCAP, rosbag2 sqlite3) and the
 // one assembly that turns any bag into the format-neutral sensor log (core/sensor_log.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CARMEN log files (plain or gzip), read as a stream of messages and written atomically.
 //

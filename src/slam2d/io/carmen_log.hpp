@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A whole CARMEN log written from messages, with the PARAM lines that declare the geometry of its
 // FLASER/RLASER scans, so that CarmenReader gives back every scan's beam angles, maximum range

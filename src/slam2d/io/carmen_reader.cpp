@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Reader for CARMEN 0.7 logger files (carmen/src/logger, "message formats defined: ...").
 //
 // Every message ends in "ipc_timestamp ipc_hostname logger_timestamp"; old logs may stop after

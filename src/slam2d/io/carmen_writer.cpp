@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Writer for CARMEN 0.7 logger files (the formats read by carmen_reader.cpp).
 //
 // Every message ends in "ipc_timestamp slam2d logger_timestamp" with logger_timestamp equal to

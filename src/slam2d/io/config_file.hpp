@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Configuration files: YAML documents (read with yaml-cpp, seen only in io) as a tree of
 // ConfigNode values that report errors as "PATH:LINE: message" and catch misspelt keys.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A config struct as text, from its field table (core/config_fields.hpp): a commented YAML
 // document that read_config() reads back to the same values (`slam2d config dump`, the presets

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A log of any format as the format-neutral sensor log (core/sensor_log.hpp): a CARMEN log (plain
 // or .gz), a ROS 1 bag, an MCAP file or a rosbag2 folder (metadata.yaml beside its .mcap or .db3

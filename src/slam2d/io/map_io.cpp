@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Occupancy maps in the ROS map_server format (map_server/src/image_loader.cpp and
 // map_saver.cpp of ROS 1 navigation; nav2_map_server's map_io.cpp for the "raw" mode).
 // Images: Netpbm PGM (P5 binary, P2 ASCII; http://netpbm.sourceforge.net/doc/pgm.html) and PNG

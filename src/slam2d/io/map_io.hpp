@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Occupancy maps in the ROS map_server format: a YAML file naming a PGM or PNG image.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // MCAP files (https://mcap.dev/spec), as ROS 2's rosbag2 writes them: profile "ros2", CDR messages.
 //

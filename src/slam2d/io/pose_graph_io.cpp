@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // 2D pose graph files: g2o (Kuemmerle et al. 2011, "g2o: A general framework for graph optimization")
 // and TORO (Grisetti et al. 2007, "A tree parameterization for efficiently computing maximum
 // likelihood maps using gradient descent"), which HOG-Man also reads.

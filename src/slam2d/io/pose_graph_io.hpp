@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // 2D pose graph files.
 // - g2o: "VERTEX_SE2 id x y theta", "EDGE_SE2 from to dx dy dtheta I11 I12 I13 I22 I23 I33", "FIX id ...".

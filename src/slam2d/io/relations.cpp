@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Relations files of Kuemmerle et al. 2009, "On measuring the accuracy of SLAM algorithms".
 #include "slam2d/io/relations.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Relations files of Kuemmerle et al. 2009, "On measuring the accuracy of SLAM algorithms":
 // one relation per line, "t1 t2 x y z roll pitch yaw" (s, m, rad): the pose of the robot at t2

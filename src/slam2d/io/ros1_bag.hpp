@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS 1 bags (format v2.0, http://wiki.ros.org/Bags/Format/2.0): uncompressed, bz2 and lz4 chunks,
 // read through the bag's index. Decodes sensor_msgs/LaserScan, nav_msgs/Odometry,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/rosbag2.hpp"
 
 #include <sqlite3.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // rosbag2 folders (ROS 2): metadata.yaml beside the storage file, MCAP ("mcap") or SQLite
 // ("sqlite3", a .db3 with the Humble tables topics(id, name, type, serialization_format,

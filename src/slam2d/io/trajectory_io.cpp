@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Trajectory files: slam2d text ("timestamp x y theta") and TUM RGB-D ("timestamp tx ty tz qx qy qz qw",
 // Sturm et al. 2012, "A benchmark for the evaluation of RGB-D SLAM systems").
 #include "slam2d/io/trajectory_io.hpp"

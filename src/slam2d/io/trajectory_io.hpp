@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Trajectory files.
 // - slam2d text (default): "timestamp x y theta" per line (s, m, m, rad), '#' comments.

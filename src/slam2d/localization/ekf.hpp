@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // EKF localization with scan-matching updates: J.-S. Gutmann, W. Burgard, D. Fox, K. Konolige,
 // "An experimental comparison of localization methods", IROS 1998 (the scan-matching Kalman

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The coarse pass of a coarse-to-fine global localization: every pose of a regular grid over the
 // map's free space and the headings is scored by the likelihood field (Thrun et al. 2005, Table

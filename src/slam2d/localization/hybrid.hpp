@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Hybrid localization, as proposed by J.-S. Gutmann, W. Burgard, D. Fox, K. Konolige, "An
 // experimental comparison of localization methods", IROS 1998 (Sec. VI: combine the robustness

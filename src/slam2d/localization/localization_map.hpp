@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The known map a localizer runs in: the occupancy map, its likelihood field (grid/
 // likelihood_field.hpp, Thrun et al. 2005 Table 6.3), the free cells (where a robot can stand:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Grid-based Markov localization: W. Burgard, D. Fox, D. Hennig, T. Schmidt, "Estimating the
 // absolute position of a mobile robot using position probability grids", AAAI 1996; D. Fox,

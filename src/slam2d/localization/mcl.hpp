@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Monte Carlo localization: F. Dellaert, D. Fox, W. Burgard, S. Thrun, "Monte Carlo localization
 // for mobile robots", ICRA 1999; as Table 8.2 / 8.3 of S. Thrun, W. Burgard, D. Fox,

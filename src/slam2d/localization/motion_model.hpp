@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The odometry motion model: S. Thrun, W. Burgard, D. Fox, "Probabilistic Robotics", 2005,
 // Sec. 5.4. The motion between two odometry readings is split into a rotation, a translation and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Range-finder sensor models for localization in a known map: S. Thrun, W. Burgard, D. Fox,
 // "Probabilistic Robotics", 2005, Chapter 6.

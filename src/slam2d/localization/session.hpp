@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One localization run over a log, the way `slam2d localize` and the tests drive a localizer:
 // feeds the scans with their odometry checked by the odometry guard (core/odometry_guard.hpp),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Every matcher by name, with its configuration from defaults or from a YAML preset
 // (configs/<name>.yaml): what the CLI, the benchmarks and the all-matchers test suite use.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Every mapping and localization method by name, with its configuration from the defaults or from
 // a YAML preset (configs/<method>.yaml): what `slam2d map --config` and `slam2d localize --config`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The modular ICP pipeline (pipeline.hpp) from a YAML file, the shape of libpointmatcher's
 // configurations (Pomerleau et al. 2013, Sec. 3; their evaluations/official_solutions/*.yaml):

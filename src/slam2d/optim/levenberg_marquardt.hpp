@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The one Gauss-Newton / Levenberg-Marquardt driver over normal_equations.hpp (K. Levenberg 1944,
 // D. W. Marquardt 1963; the lambda schedule of Numerical Recipes, 3rd ed., Sec. 15.5.2) that every

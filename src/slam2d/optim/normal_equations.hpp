@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The shared least-squares layer, in the shape of iris_lama's nlls/problem.h: residuals and
 // Jacobians are accumulated into fixed-size normal equations, then one Gauss-Newton or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The 2D pose graph (Lu & Milios 1997) with the edge error of g2o (R. Kuemmerle, G. Grisetti,
 // H. Strasdat, K. Konolige, W. Burgard, "g2o: A general framework for graph optimization",
 // ICRA 2011) and SPA (Konolige et al. 2010, Eq. (1)-(3)): the measurement is compared with the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A 2D pose graph: nodes are robot poses T_world_node, edges are measured relative poses with
 // their information matrices (the constraints of graph SLAM; F. Lu, E. Milios, "Globally

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Robust kernels for iteratively reweighted least squares: P. J. Huber, "Robust estimation of a
 // location parameter", Ann. Math. Statist. 35(1), 1964; the Cauchy (Lorentzian) and Tukey

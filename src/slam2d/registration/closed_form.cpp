@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Closed-form ICP steps: Arun 1987 / Umeyama 1991 (SVD), Besl & McKay 1992 Sec. III-C (unit
 // quaternion), Low 2004 (point-to-plane linear least squares). See closed_form.hpp.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Closed-form solvers for one step of the ICP family in the plane, shared by icp, trimmed_icp,
 // point_to_plane and any other matcher that has paired points:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Correlative scan matching: E. Olson, "Real-time correlative scan matching", ICRA 2009.
 //

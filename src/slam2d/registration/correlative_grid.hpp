@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The rasterised lookup table of correlative scan matching: E. Olson, "Real-time correlative scan
 // matching", ICRA 2009, Sec. III-B (the table) and Sec. IV (the low-resolution table), with the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan-to-map matching against a point map (graph SLAM's loop closures, the "scan matcher" of
 // Karto): the scan's end points (robot frame) against a cloud of map-frame points (graph SLAM:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How uncertain is an ICP estimate? Two estimates from a matcher's final correspondences:
 //

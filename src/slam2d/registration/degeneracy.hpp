@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Is the match constrained in every direction? The Fisher information of the pose from
 // point-to-line residuals (A. Censi, "On achievable accuracy for range-finder localization",

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // GA + ICP hybrid (Martinez et al., J. Field Robotics 2006); see the header for the equations.
 #include "slam2d/registration/ga_icp.hpp"
 

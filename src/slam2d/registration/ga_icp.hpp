@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // GA + ICP hybrid: J. L. Martinez, J. Gonzalez, J. Morales, A. Mandow, A. J. Garcia-Cerezo,
 // "Mobile robot motion estimation by 2D scan matching with genetic and iterative closest point

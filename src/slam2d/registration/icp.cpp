@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Point-to-point ICP and accelerated ICP: P. J. Besl and N. D. McKay, "A method for
 // registration of 3-D shapes", IEEE PAMI 14(2), 1992 (Sec. III-A closest points, Sec. III-C
 // registration, Sec. IV the algorithm, Sec. IV-E its acceleration). See icp.hpp.

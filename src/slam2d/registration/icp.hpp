@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Point-to-point ICP: P. J. Besl and N. D. McKay, "A method for registration of 3-D shapes",
 // IEEE PAMI 14(2), 1992, in the plane. Each iteration pairs every source point, moved by the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // IMRP and IDC (F. Lu and E. Milios, J. Intelligent and Robotic Systems 18, 1997, Sec. 4).
 // Equation numbers refer to idc.hpp.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // IMRP and IDC: F. Lu and E. Milios, "Robot pose estimation in unknown environments by matching
 // 2D range scans", Journal of Intelligent and Robotic Systems 18, 1997 (also CVPR 1994), Sec. 4.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Nearest neighbours in the plane: a kd-tree over a caller's points (nanoflann, J. L. Blanco and
 // P. K. Rai, 2014). This header is the only place nanoflann is seen. The tree indexes the vector

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/registration/likelihood_field_match.hpp"
 
 #include <Eigen/Dense>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan-to-map matching against a likelihood field (the EKF's measurement, the localizers' motion
 // within an odometry stall): the pose that minimises the squared distances

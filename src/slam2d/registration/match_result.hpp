@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The result every scan matcher returns (the shape of small_gicp's RegistrationResult): the
 // estimate, its covariance, how the iteration ended and whether the geometry constrained it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Shared steps of the closest-point matchers; see nearest_association.hpp.
 
 #include "slam2d/registration/nearest_association.hpp"

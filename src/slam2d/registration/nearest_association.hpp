@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The steps the closest-point matchers share (icp.cpp, trimmed_icp.cpp, point_to_plane.cpp, and
 // the stages of the modular pipeline, pipeline_stages.cpp and pipeline.cpp):

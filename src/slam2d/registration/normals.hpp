@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Surface normals of a 2D point cloud, for point-to-line and point-to-plane metrics and for the
 // Fisher information (degeneracy.hpp). A normal is the unit eigenvector of the smallest

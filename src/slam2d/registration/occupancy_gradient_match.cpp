@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/registration/occupancy_gradient_match.hpp"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A modular ICP pipeline in the spirit of libpointmatcher: F. Pomerleau, F. Colas, R. Siegwart,
 // S. Magnenat, "Comparing ICP variants on real-world data sets", Autonomous Robots 34(3), 2013

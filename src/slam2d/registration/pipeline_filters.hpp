@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The filters of the modular ICP pipeline (pipeline.hpp), after libpointmatcher's data-points
 // filters and outlier filters: F. Pomerleau, F. Colas, R. Siegwart, S. Magnenat, "Comparing ICP

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The matching and error-minimisation stages of the modular ICP pipeline (pipeline.hpp), after
 // F. Pomerleau, F. Colas, R. Siegwart, S. Magnenat, "Comparing ICP variants on real-world data

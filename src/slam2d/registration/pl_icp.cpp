@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // PL-ICP: A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008. The equation
 // numbers are those listed in pl_icp.hpp.
 

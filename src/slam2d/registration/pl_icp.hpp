@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PL-ICP, ICP with a point-to-line metric: A. Censi, "An ICP variant using a point-to-line
 // metric", ICRA 2008. Preset: configs/pl-icp.yaml; method page: docs/methods/pl_icp.md.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Point-to-plane ICP by linear least squares: K.-L. Low, TR04-004, UNC Chapel Hill, 2004, in 2D.
 // See point_to_plane.hpp; the linear system is solve_point_to_plane (closed_form.cpp).
 

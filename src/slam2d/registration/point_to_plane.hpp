@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Point-to-plane ICP by linear least squares: K.-L. Low, "Linear least-squares optimization for
 // point-to-plane ICP surface registration", TR04-004, UNC Chapel Hill, 2004, in the plane (the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Scan-to-scan odometry with keyframes (CSM's ROS laser_scan_matcher); see scan_odometry.hpp.
 
 #include "slam2d/registration/scan_odometry.hpp"

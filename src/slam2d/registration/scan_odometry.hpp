@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan-to-scan odometry with keyframes, as in the ROS wrapper of Censi's CSM
 // (laser_scan_matcher, I. Dryanovski and W. Morris, scan_tools): each scan is matched against

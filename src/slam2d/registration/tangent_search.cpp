@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The tangent-based rotation search and least-squares matcher (F. Lu and E. Milios, J. Intelligent
 // and Robotic Systems 18, 1997, Sec. 3). Equation numbers refer to tangent_search.hpp.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The tangent-based rotation search and least-squares matcher of F. Lu and E. Milios, "Robot
 // pose estimation in unknown environments by matching 2D range scans", Journal of Intelligent

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Trimmed ICP: D. Chetverikov, D. Svirko, D. Stepanov, P. Krsek, "The Trimmed Iterative Closest
 // Point algorithm", ICPR 2002 (Sec. 3, steps 1-5, and the overlap objective psi). See
 // trimmed_icp.hpp.

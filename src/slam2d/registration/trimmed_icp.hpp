@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Trimmed ICP: D. Chetverikov, D. Svirko, D. Stepanov, P. Krsek, "The Trimmed Iterative Closest
 // Point algorithm", ICPR 2002. Least trimmed squares: each iteration pairs every source (data)

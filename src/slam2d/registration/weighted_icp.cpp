@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Boolean and soft-weighted ICP in the six-step framework of Rusinkiewicz & Levoy 2001 (see the
 // header for the steps and equations).
 #include "slam2d/registration/weighted_icp.hpp"

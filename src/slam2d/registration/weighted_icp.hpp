@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Boolean (binary) and soft-weighted ICP, as compared in the 2013 ICP-SLAM work on a bi-steerable
 // robot, written as the six-step ICP framework of S. Rusinkiewicz and M. Levoy, "Efficient

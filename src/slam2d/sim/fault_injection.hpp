@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Fault injection for CARMEN logs: deterministic perturbations of a recorded log's odometry,
 // timing and laser scans, to measure how a method degrades (docs/faults.md has every fault, its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A planar laser range finder in the style of a SICK LMS 200 as logged by CARMEN: beams over the
 // field of view, Gaussian range noise, random dropouts, and "no return" reported as range_max.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Wheel odometry error model: the odometry motion model of Thrun, Burgard & Fox, "Probabilistic
 // Robotics" (2005), Sec. 5.4 / Table 5.6, plus the systematic errors of real wheels.

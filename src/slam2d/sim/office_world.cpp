@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/sim/office_world.hpp"
 
 #include <initializer_list>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The "office" world: a made-up 30 m x 20 m office floor (no real building), drawn to have what
 // real indoor logs have: a corridor ring around a central block, rooms with door openings,

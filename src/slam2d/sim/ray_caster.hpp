@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Fast ray casting against a World's walls: the walls are bucketed in a uniform grid and a ray
 // visits the grid cells along its path in order (Amanatides & Woo, "A fast voxel traversal

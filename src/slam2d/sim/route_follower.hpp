@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A smooth path-following controller for a differential-drive robot on a closed polyline route:
 // pure pursuit (Coulter, "Implementation of the Pure Pursuit Path Tracking Algorithm",

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated robot runs: a differential-drive robot follows a world's route (route_follower.hpp),
 // its wheel odometry drifts (odometry_model.hpp) and its laser scans the walls (laser_model.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated 2D worlds: walls as line segments in the map frame, plus a route the robot drives.
 // Ray casting here is the brute-force reference; RayCaster (ray_caster.hpp) is the fast path.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Graph SLAM on the simulated office: keyframe rules and chains against hand cases, the loop of
 // the office run closed and the trajectory recovered within stated bounds (with and without
 // odometry, with delayed closure), a false loop edge absorbed by the robust kernel, determinism.

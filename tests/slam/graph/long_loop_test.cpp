@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Loops that close late: the drift model against hand cases, the graph paths it runs on, and two
 // simulated loops the searches of loop_closure.hpp must close. The worlds are the office scaled
 // up (wider corridors, longer legs) seen by a short-range laser (8-10 m), so that the tracker

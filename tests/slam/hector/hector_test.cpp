@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Hector SLAM (Kohlbrecher et al. 2011) on the simulator: the matcher recovers known offsets,
 // the SLAM loop recovers the true trajectory of the office run with and without odometry, the
 // Hessian covariance shows a corridor's degenerate direction, the IMU projection levels a tilted

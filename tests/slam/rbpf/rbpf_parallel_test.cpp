@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Rao-Blackwellized particle filter SLAM on several threads (RbpfConfig::threads): serial and
 // parallel give the same trajectory, weights, statistics and maps, bit for bit, on a simulated run
 // (also with resampling at almost every update, so that many tiles and path nodes are shared while

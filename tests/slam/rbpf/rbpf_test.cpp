@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Rao-Blackwellized particle filter SLAM: N_eff and low-variance resampling against hand-computed
 // cases, the proposal's densities and likelihood lookup, one particle on a noiseless simulator
 // reducing to scan matching, determinism, the written path through the update poses, copy-on-write

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Stamp association of an estimated and a reference trajectory, the first step of the ATE and
 // RPE metrics (Sturm et al. 2012, "A benchmark for the evaluation of RGB-D SLAM systems", IROS,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CDR (OMG XCDR1, as ROS 2's rmw writes it) decoding of the few message types slam2d reads from
 // ROS 2 bags (MCAP and rosbag2 sqlite3) into the plain structs of io/bag_source.hpp.

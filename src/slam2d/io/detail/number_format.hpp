@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Numbers in text files: format_number and the strict parse_double / parse_int of
 // core/number_text.hpp (included here), and the small helpers every line-based reader needs

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS 1 serialization (http://wiki.ros.org/msg, little-endian; strings and arrays carry a uint32
 // length; time is uint32 sec + uint32 nsec) of the four message types slam2d reads.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS 1 bag v2.0 records (http://wiki.ros.org/Bags/Format/2.0): a record is
 //   int32 header_len, header (fields: int32 field_len, "name=value"), int32 data_len, data.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Little-endian reads over a byte span, each one checked against the bytes left: the one reader
 // for ROS 1 record headers, index data and serialized messages.

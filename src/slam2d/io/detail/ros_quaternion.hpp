@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The rotation of a ROS geometry_msgs/Quaternion as the planar readers need it: the z-y-x Euler
 // angles (yaw for poses and transforms, roll and pitch for an IMU's attitude). One home for the

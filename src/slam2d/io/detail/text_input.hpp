@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Line-by-line reading of plain or gzip-compressed text files, streamed (zlib reads both).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Exact order statistics of non-negative values by their bit patterns, for the trimming of
 // PL-ICP (Eq. (3) of Censi 2008 takes two quantiles of the pair distances at every iteration).

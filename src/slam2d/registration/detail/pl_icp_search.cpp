@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Eq. (2) of PL-ICP (Censi 2008): the projective search with jump tables and its clearance
 // certificate (pl_icp_search.hpp), and the kd-tree fallback.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Eq. (2) of PL-ICP (A. Censi, "An ICP variant using a point-to-line metric", ICRA 2008): the
 // closest target point j1 of a moved source point, by the projective search over the ordered

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/slam/graph/graph_slam.hpp"
 
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Graph SLAM in the shape of Karto (K. Konolige, G. Grisetti, R. Kuemmerle, W. Burgard,
 // B. Limketkai, R. Vincent, "Efficient sparse pose adjustment for 2D mapping", IROS 2010, whose

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Keyframes of graph SLAM: the scans that become graph nodes. A scan is taken when the robot
 // moved a minimum distance or turned a minimum angle since the last keyframe (Karto's minimum

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Loop closure for graph SLAM, as Karto does it (K. Konolige et al., IROS 2010, Sec. III; the
 // search of W. Hess, D. Kohler, H. Rapp, D. Andor, "Real-time loop closure in 2D LIDAR SLAM",

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/slam/hector/hector_slam.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The improved proposal of G. Grisetti, C. Stachniss, W. Burgard, "Improved techniques for grid
 // mapping with Rao-Blackwellized particle filters", IEEE T-RO 23(1), 2007, Sec. IV-A (GMapping).

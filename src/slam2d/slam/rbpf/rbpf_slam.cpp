@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
 
 #include <oneapi/tbb/blocked_range.h>
