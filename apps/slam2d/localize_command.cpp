@@ -89,12 +89,8 @@ std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const 
     initial = SE2(pose[0], pose[1], pose[2]);
     covariance = covariance_from_sigmas(sigma[0], sigma[1], sigma[2]);
   }
-  // The method's config: the library defaults, or the preset of --config, then the flags given.
-  const auto method_config = [&](auto defaults) {
-    return options.config.empty() ? defaults : read_method_preset(options.config, options.method, defaults);
-  };
   if (options.method == "mcl") {
-    MclConfig config = method_config(MclConfig{});
+    MclConfig config = read_method_preset(options.config, options.method, MclConfig{});
     if (options.particles) {
       check(*options.particles >= 10, "localize: --particles must be at least 10");
       config.max_particles = *options.particles;
@@ -110,17 +106,17 @@ std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const 
   }
   check(!options.sensor && !options.particles, "localize: --sensor and --particles apply to --method mcl only");
   if (options.method == "ekf") {
-    auto ekf = std::make_unique<EkfLocalization>(map, method_config(EkfConfig{}));
+    auto ekf = std::make_unique<EkfLocalization>(map, read_method_preset(options.config, options.method, EkfConfig{}));
     ekf->initialize(initial, covariance);
     return ekf;
   }
   if (options.method == "markov") {
-    auto markov = std::make_unique<MarkovGridLocalization>(map, method_config(MarkovGridConfig{}));
+    auto markov = std::make_unique<MarkovGridLocalization>(map, read_method_preset(options.config, options.method, MarkovGridConfig{}));
     if (has_initial) markov->initialize(initial, covariance);
     else markov->initialize_global();
     return markov;
   }
-  auto hybrid = std::make_unique<HybridLocalization>(map, method_config(HybridConfig{}));
+  auto hybrid = std::make_unique<HybridLocalization>(map, read_method_preset(options.config, options.method, HybridConfig{}));
   if (has_initial) hybrid->initialize(initial, covariance);
   else hybrid->initialize_global();
   return hybrid;

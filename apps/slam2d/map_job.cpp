@@ -42,11 +42,6 @@ struct MappingRun {
   SE2 T_robot_sensor;                 // the first scan's mounting (--trajectory-frame sensor)
 };
 
-// The method's config: the library defaults, or the preset of --config, then the flags given.
-template <typename Config>
-Config method_config(const MapJobOptions& options, Config defaults) {
-  return options.config.empty() ? defaults : read_method_preset(options.config, options.method, defaults);
-}
 
 // The odometry guard's counts and its warning, into the run.
 void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
@@ -103,7 +98,7 @@ MappingRun map_with_odometry(const MapJobOptions& options) {
 // Hector SLAM (Kohlbrecher et al. 2011): scan-to-map matching on a map pyramid, odometry as the
 // initial guess unless --no-odometry. The map written is the finest pyramid level.
 MappingRun map_with_hector(const MapJobOptions& options) {
-  HectorSlamConfig config = method_config(options, HectorSlamConfig{});
+  HectorSlamConfig config = read_method_preset(options.config, options.method, HectorSlamConfig{});
   if (options.levels) config.map.levels = *options.levels;
   if (options.resolution) config.map.grid.resolution = *options.resolution;
   if (options.no_odometry) config.prior = MotionPrior::kLastPose;
@@ -123,7 +118,7 @@ MappingRun map_with_hector(const MapJobOptions& options) {
 // Graph SLAM (slam/graph): keyframes, scan-to-local-map constraints, loop closure, sparse pose
 // adjustment. The trajectory's scans between keyframes follow the odometry between them.
 MappingRun map_with_graph(const MapJobOptions& options) {
-  GraphSlamConfig config = method_config(options, GraphSlamConfig{});
+  GraphSlamConfig config = read_method_preset(options.config, options.method, GraphSlamConfig{});
   if (options.resolution) config.map_resolution = *options.resolution;
   GraphSlam slam(config);
   MappingRun run = run_over_scans(options, [&](const LaserMessage& laser) {
@@ -158,7 +153,7 @@ MappingRun map_with_graph(const MapJobOptions& options) {
 // particle's path, one pose per scan (scans between updates follow the scan-matched odometry).
 MappingRun map_with_rbpf(const MapJobOptions& options) {
   check(!options.no_odometry, "map: the rbpf method needs odometry (drop --no-odometry)");
-  RbpfConfig config = method_config(options, RbpfConfig{});
+  RbpfConfig config = read_method_preset(options.config, options.method, RbpfConfig{});
   if (options.particles) config.particles = *options.particles;
   if (options.seed) config.seed = *options.seed;
   if (options.threads) config.threads = *options.threads;

@@ -26,7 +26,7 @@ struct MethodEntry {
 template <typename Config>
 MethodEntry method(std::string name, Config defaults) {
   return {name, [name, defaults](const std::string& path) {
-            return field_rows(path.empty() ? defaults : read_method_preset(path, name, defaults));
+            return field_rows(read_method_preset(path, name, defaults));
           }};
 }
 

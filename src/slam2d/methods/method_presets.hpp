@@ -27,9 +27,11 @@ std::vector<FieldRow> method_fields(const std::string& name, const std::string& 
 ConfigNode load_method_preset(const std::string& path, const std::string& method);
 
 /// `config` with the fields of the preset at `path` (for `method`) read over it, then validated;
-/// an invalid combination is a ParseError naming the file.
+/// an invalid combination is a ParseError naming the file. An empty path (no --config) gives
+/// `config` as it is.
 template <typename Config>
 Config read_method_preset(const std::string& path, const std::string& method, Config config) {
+  if (path.empty()) return config;
   read_valid_config(load_method_preset(path, method), config);
   return config;
 }
