@@ -53,7 +53,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
     if (*options.keyframe == 0.0) config.keyframe_angle = 0.0;
   }
   if (options.keyframe_angle_deg) config.keyframe_angle = deg_to_rad(*options.keyframe_angle_deg);
-  if (options.input.carmen.range_max) config.max_range = *options.input.carmen.range_max;
+  if (options.input.carmen.geometry.range_max) config.max_range = *options.input.carmen.geometry.range_max;
   validate(config);
   return config;
 }

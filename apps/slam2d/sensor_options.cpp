@@ -41,15 +41,15 @@ void add_number(CLI::App* command, const std::string& name, std::optional<double
 
 void add_sensor_options(CLI::App* command, CarmenReaderOptions& options, const std::string& range_max_help) {
   const double radians_per_degree = deg_to_rad(1.0);
-  add_number(command, "--fov", options.field_of_view, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
-             "deg: FLASER/RLASER field of view (default: the log's PARAM lines checked against the beam count, else 180)");
-  add_number(command, "--angle-min", options.angle_min, radians_per_degree, number_in(-360.0, 360.0, false, "deg"),
-             "deg: FLASER/RLASER angle of the first beam (default: -fov / 2)");
-  add_number(command, "--angle-increment", options.angle_increment, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
-             "deg: FLASER/RLASER angle between beams (default: the log's PARAM, else fov / steps)");
-  add_number(command, "--range-max", options.range_max, 1.0,
+  add_number(command, "--fov", options.geometry.field_of_view, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
+             "deg: the laser's field of view, steps x increment (default: a bag's LaserScan as declared; CARMEN: the PARAM lines checked against the beam count, else 180)");
+  add_number(command, "--angle-min", options.geometry.angle_min, radians_per_degree, number_in(-360.0, 360.0, false, "deg"),
+             "deg: the angle of the first beam (default: as declared, else -fov / 2)");
+  add_number(command, "--angle-increment", options.geometry.angle_increment, radians_per_degree, number_in(0.0, 360.0, true, "deg"),
+             "deg: the angle between beams (default: as declared; CARMEN: the PARAM, else fov / steps)");
+  add_number(command, "--range-max", options.geometry.range_max, 1.0,
              number_in(0.0, std::numeric_limits<double>::infinity(), true, "m"),
-             range_max_help.empty() ? "m: FLASER/RLASER readings at or above are no return (default: the log's PARAM, else 80)"
+             range_max_help.empty() ? "m: readings at or above are no return (default: as declared; CARMEN: the PARAM, else 80)"
                                     : range_max_help);
   command->add_flag_callback("--raw-odometry", [&options] { options.repair_reverse_odometry = false; },
                              "Keep the odometry as logged: do not reverse the travel of steps that move forward while ODOM tv < 0 "

@@ -186,8 +186,8 @@ TEST(CarmenReader, ParamLinesOverrideGeometryForTheScansThatFollow) {
 
 TEST(CarmenReader, OptionsOverrideParamLinesAndDefaults) {
   CarmenReaderOptions options;
-  options.field_of_view = kPi / 2;
-  options.range_max = 12.5;
+  options.geometry.field_of_view = kPi / 2;
+  options.geometry.range_max = 12.5;
   options.range_min = 0.1;
   const ReadResult log = read_log(carmen_fixture("params.log"), options);
   ASSERT_EQ(log.messages.size(), 4u);
@@ -206,8 +206,8 @@ TEST(CarmenReader, OptionsOverrideParamLinesAndDefaults) {
     EXPECT_EQ(laser(log, i).scan.range_min, 0.1);
   }
   CarmenReaderOptions all;
-  all.angle_increment = 0.01;
-  all.angle_min = -0.3;
+  all.geometry.angle_increment = 0.01;
+  all.geometry.angle_min = -0.3;
   all.default_range_max = 20.0;
   const ReadResult fixed = read_log(carmen_fixture("params.log"), all);
   EXPECT_EQ(laser(fixed, 0).scan.range_max, 20.0);  // no PARAM yet: the default
@@ -309,8 +309,8 @@ TEST(CarmenGeometry, ContradictionNoUnitExplainsIsAParseErrorAtTheParamLine) {
   }
   // The overrides make the same log readable.
   CarmenReaderOptions options;
-  options.field_of_view = deg_to_rad(45);
-  options.angle_increment = deg_to_rad(0.25);
+  options.geometry.field_of_view = deg_to_rad(45);
+  options.geometry.angle_increment = deg_to_rad(0.25);
   const ReadResult log = read_log(path, options);
   ASSERT_EQ(log.messages.size(), 2u);
   expect_angles_deg(laser(log, 1).scan, -22.5, 0.25, 22.5);
@@ -332,10 +332,10 @@ TEST(CarmenGeometry, ContradictionTheConventionExplainsFallsBackWithAWarning) {
 
 TEST(CarmenGeometry, OverridesBeatTheParamLines) {
   CarmenReaderOptions options;
-  options.field_of_view = deg_to_rad(90);
-  options.angle_increment = deg_to_rad(0.25);
-  options.angle_min = deg_to_rad(-30);
-  options.range_max = 7.5;
+  options.geometry.field_of_view = deg_to_rad(90);
+  options.geometry.angle_increment = deg_to_rad(0.25);
+  options.geometry.angle_min = deg_to_rad(-30);
+  options.geometry.range_max = 7.5;
   const ReadResult log = read_log(carmen_fixture("geometry_fov_radians.log"), options);
   expect_angles_deg(laser(log, 0).scan, -30.0, 0.25, 60.0);
   EXPECT_EQ(laser(log, 0).scan.range_max, 7.5);
@@ -348,7 +348,7 @@ TEST(CarmenGeometry, OverridesBeatTheParamLines) {
   // A field of view override alone: the PARAM resolution (0.5 deg) fits 361 beams over 180 deg,
   // not 120 deg, so it is dropped with a warning and the increment is 120 deg / 360.
   CarmenReaderOptions fov_only;
-  fov_only.field_of_view = deg_to_rad(120);
+  fov_only.geometry.field_of_view = deg_to_rad(120);
   const OldLaserGeometry h = front_geometry_of("geometry_fov_radians.log", fov_only);
   EXPECT_NEAR(h.angle_increment.value, deg_to_rad(120.0 / 360.0), 1e-15);
   EXPECT_NEAR(h.angle_min.value, deg_to_rad(-60), 1e-15);
@@ -356,7 +356,7 @@ TEST(CarmenGeometry, OverridesBeatTheParamLines) {
   EXPECT_NE(h.warnings[0].find("dropped"), std::string::npos) << h.warnings[0];
   // An increment override alone, against the radians fov: 361 x 0.5 deg fits 3.14159 read as radians.
   CarmenReaderOptions increment_only;
-  increment_only.angle_increment = deg_to_rad(0.5);
+  increment_only.geometry.angle_increment = deg_to_rad(0.5);
   EXPECT_EQ(front_geometry_of("geometry_fov_radians.log", increment_only).field_of_view.source,
             GeometrySource::kParamUnitGuess);
 }
@@ -439,11 +439,11 @@ TEST_F(CarmenGeometryCases, AFieldOfViewOfMoreThanAFullTurnIsRefusedAtItsLine) {
 TEST(CarmenGeometry, OptionsOutOfRangeAreRefused) {
   const std::string path = carmen_fixture("flaser_beams.log");
   for (auto set : std::vector<void (*)(CarmenReaderOptions&)>{
-           [](CarmenReaderOptions& o) { o.field_of_view = 0.0; },
-           [](CarmenReaderOptions& o) { o.field_of_view = 7.0; },
-           [](CarmenReaderOptions& o) { o.angle_increment = -0.01; },
-           [](CarmenReaderOptions& o) { o.angle_min = std::numeric_limits<double>::quiet_NaN(); },
-           [](CarmenReaderOptions& o) { o.range_max = 0.0; }}) {
+           [](CarmenReaderOptions& o) { o.geometry.field_of_view = 0.0; },
+           [](CarmenReaderOptions& o) { o.geometry.field_of_view = 7.0; },
+           [](CarmenReaderOptions& o) { o.geometry.angle_increment = -0.01; },
+           [](CarmenReaderOptions& o) { o.geometry.angle_min = std::numeric_limits<double>::quiet_NaN(); },
+           [](CarmenReaderOptions& o) { o.geometry.range_max = 0.0; }}) {
     CarmenReaderOptions options;
     set(options);
     EXPECT_THROW({ CarmenReader reader(path, options); }, Error);

@@ -66,8 +66,11 @@ BagChoice choose_topics(const std::string& path, const std::vector<BagTopic>& to
   return choice;
 }
 
-BagLogReader::BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection)
-    : source_(std::move(source)), choice_(choose_topics(source_->path(), source_->topics(), selection)) {
+BagLogReader::BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection, ScanGeometryOverrides geometry)
+    : source_(std::move(source)),
+      choice_(choose_topics(source_->path(), source_->topics(), selection)),
+      geometry_(geometry) {
+  check_overrides(geometry_, source_->path());
   wanted_ = {choice_.scan_topic};
   if (!choice_.odom_topic.empty()) wanted_.push_back(choice_.odom_topic);
   if (has_topic(source_->topics(), "/tf_static", kTf)) wanted_.push_back("/tf_static");
@@ -192,8 +195,9 @@ LaserMessage BagLogReader::to_laser(const DecodedScan& scan, std::size_t index) 
   LaserMessage laser;
   laser.type = "LaserScan";
   laser.scan = scan.scan;
+  apply_overrides(laser.scan, geometry_);
   laser.scan.T_robot_sensor = choice_.T_base_laser.value_or(SE2());
-  laser.field_of_view = laser.scan.angle_max() - laser.scan.angle_min;  // as the message declares it
+  laser.field_of_view = laser.scan.angle_max() - laser.scan.angle_min;  // as the message declares it, or overridden
   const std::optional<SE2> odom = odometry_at(scan.scan.stamp);
   laser.has_poses = odom.has_value();
   laser.odom_pose = odom.value_or(SE2());

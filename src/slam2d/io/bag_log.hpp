@@ -13,6 +13,8 @@
 // - Each scan's odometry pose (LaserMessage::odom_pose): the odometry interpolated at the scan's
 //   stamp (held at the first/last reading outside their span): CARMEN's FLASER carries it, a bag
 //   carries the odometry on its own topic.
+// - The scans' geometry as the messages declare it, or as ScanGeometryOverrides says (a converter
+//   that declared 180 deg for a 179 deg sensor).
 // - Ranges as published: NaN, +-inf and values outside [range_min, range_max] are "no return"
 //   (LaserScan::is_valid), never errors.
 // Messages come out in the bag's order (each reader's: see its header), each scan once the
@@ -27,6 +29,7 @@
 
 #include "slam2d/core/sensor_log.hpp"
 #include "slam2d/io/bag_source.hpp"
+#include "slam2d/io/scan_geometry.hpp"
 
 namespace slam2d {
 
@@ -58,7 +61,8 @@ BagChoice choose_topics(const std::string& path, const std::vector<BagTopic>& to
 
 class BagLogReader {
  public:
-  explicit BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection = {});
+  explicit BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection = {},
+                        ScanGeometryOverrides geometry = {});
   ~BagLogReader();
 
   /// The next message in time order, or nullopt at the end.
@@ -82,6 +86,7 @@ class BagLogReader {
 
   std::unique_ptr<BagSource> source_;
   BagChoice choice_;
+  ScanGeometryOverrides geometry_;
   std::vector<std::string> wanted_;
   std::vector<DecodedTransform> static_transforms_;
   std::deque<OdometryReading> odometry_;  // the recent readings, in the bag's order

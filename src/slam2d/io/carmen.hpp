@@ -46,18 +46,17 @@
 #include "slam2d/core/odometry.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/sensor_log.hpp"
+#include "slam2d/io/scan_geometry.hpp"
 
 namespace slam2d {
 
 struct CarmenReaderOptions {
-  /// Overrides for FLASER/RLASER geometry (rad); PARAM lines and the convention are used when
-  /// these are unset. An override beats a PARAM line; a PARAM it contradicts is dropped with a warning.
-  std::optional<double> field_of_view;    // rad, in (0, 2 pi]
-  std::optional<double> angle_increment;  // rad, > 0
-  std::optional<double> angle_min;        // rad; default -field_of_view / 2
-  /// m. FLASER/RLASER carry no maximum range: readings at or above are "no return".
-  /// A robot_front_laser_max / robot_rear_laser_max PARAM overrides the default.
-  std::optional<double> range_max;
+  /// Overrides of the FLASER/RLASER geometry (io/scan_geometry.hpp); PARAM lines and the
+  /// convention are used where unset. An override beats a PARAM line; a PARAM it contradicts is
+  /// dropped with a warning. FLASER/RLASER carry no maximum range: readings at or above the decided
+  /// one are "no return"; a robot_front_laser_max / robot_rear_laser_max PARAM gives it, else
+  /// default_range_max.
+  ScanGeometryOverrides geometry;
   double default_range_max = 80.0;  // m, SICK LMS in its 80 m mode (returns ~81.9 m for "no return")
   double range_min = 0.0;           // m
   /// Repair laser odometry that integrates reversing as forward driving (see above); false gives

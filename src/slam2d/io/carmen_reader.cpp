@@ -265,8 +265,6 @@ struct AngleDecision {
 
 std::string degrees(double radians) { return fmt::format("{:.6g} deg", rad_to_deg(radians)); }
 
-// Steps between the first and the last beam's edge: n - 1 for odd n (beams at both ends), else n.
-std::size_t steps_of(std::size_t beams) { return beams % 2 == 1 && beams > 1 ? beams - 1 : std::max<std::size_t>(beams, 1); }
 
 // beams x increment = field of view, within one beam step (n or n - 1 steps) and the rounding of
 // the printed values.
@@ -305,7 +303,7 @@ GeometryValue value_of(const AngleReading& reading, const std::string& why) {
 // A field of view that agrees with the convention's 180 deg within one beam step; one that
 // equals pi within its printed rounding (3.14159) is pi.
 bool near_convention(const AngleReading& fov, std::size_t beams) {
-  return std::abs(fov.value - kPi) <= kPi / static_cast<double>(steps_of(beams)) + fov.rounding + kAngleSlack;
+  return std::abs(fov.value - kPi) <= kPi / static_cast<double>(beam_steps(beams)) + fov.rounding + kAngleSlack;
 }
 GeometryValue convention_value_of(const AngleReading& fov, const std::string& why) {
   GeometryValue value = value_of(fov, why);
@@ -314,13 +312,13 @@ GeometryValue convention_value_of(const AngleReading& fov, const std::string& wh
 }
 
 AngleDecision from_field_of_view(const GeometryValue& fov, std::size_t beams) {
-  const std::size_t steps = steps_of(beams);
+  const std::size_t steps = beam_steps(beams);
   return {fov, {fov.value / static_cast<double>(steps), GeometrySource::kDerived,
                 fmt::format("field of view / {} steps", steps)}, {}};
 }
 
 AngleDecision from_increment(const GeometryValue& increment, std::size_t beams) {
-  const std::size_t steps = steps_of(beams);
+  const std::size_t steps = beam_steps(beams);
   return {{static_cast<double>(steps) * increment.value, GeometrySource::kDerived,
            fmt::format("{} steps x increment", steps)}, increment, {}};
 }
@@ -416,7 +414,7 @@ AngleDecision fov_and_increment(const std::vector<AngleReading>& fovs, const std
     const std::string why = fit_text(beams, pair.second->value) + note;
     AngleDecision decision{value_of(*pair.first, why), value_of(*pair.second, ""), {}};
     // A field of view printed with fewer digits than the increment (3.14159 for 360 x 0.5 deg) is that product, rounded.
-    const double spanned = static_cast<double>(steps_of(beams)) * pair.second->value;
+    const double spanned = static_cast<double>(beam_steps(beams)) * pair.second->value;
     if (pair.first->rounding > 0.0 && std::abs(pair.first->value - spanned) <= pair.first->rounding + kAngleSlack) {
       decision.field_of_view.value = spanned;
     }
@@ -448,7 +446,7 @@ std::vector<AngleReading> within_a_turn(const std::vector<AngleReading>& increme
                                         const std::string& path, std::vector<std::string>& warnings) {
   std::vector<AngleReading> valid;
   for (const AngleReading& r : increments) {
-    if (static_cast<double>(steps_of(beams)) * r.value <= 2.0 * kPi + kAngleSlack) valid.push_back(r);
+    if (static_cast<double>(beam_steps(beams)) * r.value <= 2.0 * kPi + kAngleSlack) valid.push_back(r);
   }
   if (!valid.empty() || increments.empty()) return valid;
   if (increments[0].source == GeometrySource::kOverride) {
@@ -473,15 +471,15 @@ AngleDecision decide_angles(const std::vector<AngleReading>& fovs, const std::ve
 }
 
 GeometryValue decide_range_max(const CarmenReaderOptions& options, const OldLaserParams& params) {
-  if (options.range_max) return {*options.range_max, GeometrySource::kOverride, "override"};
+  if (options.geometry.range_max) return {*options.geometry.range_max, GeometrySource::kOverride, "override"};
   if (params.range_max) return {params.range_max->value, GeometrySource::kParam, describe(*params.range_max)};
   return {options.default_range_max, GeometrySource::kConvention, "default (SICK LMS, 80 m mode)"};
 }
 
 OldLaserGeometry decide_geometry(const CarmenReaderOptions& options, const OldLaserParams& params, bool rear,
                                  std::size_t beams, std::size_t line, const std::string& path) {
-  AngleDecision angles = decide_angles(readings_of(options.field_of_view, params.field_of_view, "field of view"),
-                                       readings_of(options.angle_increment, params.resolution, "increment"), beams, path);
+  AngleDecision angles = decide_angles(readings_of(options.geometry.field_of_view, params.field_of_view, "field of view"),
+                                       readings_of(options.geometry.angle_increment, params.resolution, "increment"), beams, path);
   OldLaserGeometry geometry;
   geometry.rear = rear;
   geometry.beams = beams;
@@ -489,8 +487,8 @@ OldLaserGeometry decide_geometry(const CarmenReaderOptions& options, const OldLa
   geometry.field_of_view = std::move(angles.field_of_view);
   geometry.angle_increment = std::move(angles.angle_increment);
   geometry.warnings = std::move(angles.warnings);
-  if (options.angle_min) {
-    geometry.angle_min = {*options.angle_min, GeometrySource::kOverride, "override"};
+  if (options.geometry.angle_min) {
+    geometry.angle_min = {*options.geometry.angle_min, GeometrySource::kOverride, "override"};
   } else {
     const GeometrySource source = geometry.field_of_view.source == GeometrySource::kConvention
                                       ? GeometrySource::kConvention
@@ -502,15 +500,7 @@ OldLaserGeometry decide_geometry(const CarmenReaderOptions& options, const OldLa
 }
 
 void validate_options(const CarmenReaderOptions& options) {
-  const auto finite = [](const std::optional<double>& v) { return !v || std::isfinite(*v); };
-  check(finite(options.field_of_view) && finite(options.angle_increment) && finite(options.angle_min) &&
-            finite(options.range_max),
-        "CARMEN reader options: geometry overrides must be finite");
-  check(!options.field_of_view || (*options.field_of_view > 0.0 && *options.field_of_view <= 2.0 * kPi + kAngleSlack),
-        "CARMEN reader options: field_of_view must be in (0, 2 pi] rad");
-  check(!options.angle_increment || *options.angle_increment > 0.0,
-        "CARMEN reader options: angle_increment must be positive");
-  check(!options.range_max || *options.range_max > 0.0, "CARMEN reader options: range_max must be positive");
+  check_overrides(options.geometry, "CARMEN reader options");
   check(options.default_range_max > 0.0 && std::isfinite(options.default_range_max),
         "CARMEN reader options: default_range_max must be positive");
   check(options.range_min >= 0.0 && std::isfinite(options.range_min), "CARMEN reader options: range_min must be >= 0");

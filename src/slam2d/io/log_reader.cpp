@@ -47,7 +47,7 @@ LogReader::LogReader(const std::string& path, LogReaderOptions options) : format
   if (format_ == LogFormat::kCarmen) {
     carmen_ = std::make_unique<CarmenReader>(path, std::move(options.carmen));
   } else {
-    bag_ = std::make_unique<BagLogReader>(open_bag(format_, path), std::move(options.bag));
+    bag_ = std::make_unique<BagLogReader>(open_bag(format_, path), std::move(options.bag), options.carmen.geometry);
   }
 }
 

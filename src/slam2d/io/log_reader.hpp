@@ -23,7 +23,7 @@ LogFormat detect_log_format(const std::string& path);
 const char* log_format_name(LogFormat format);  // "carmen", "ros1", "mcap", "rosbag2"
 
 struct LogReaderOptions {
-  CarmenReaderOptions carmen;  // CARMEN only: geometry overrides, the reversing repair
+  CarmenReaderOptions carmen;  // its geometry overrides apply to every format; the rest is CARMEN's
   BagSelection bag;            // bags only: topics and frames
 };
 
