@@ -18,5 +18,6 @@ void add_optimize_command(CLI::App& app);
 void add_localize_command(CLI::App& app);
 void add_perturb_command(CLI::App& app);
 void add_config_command(CLI::App& app);
+void add_convert_command(CLI::App& app);
 
 }  // namespace slam2d::cli

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <optional>
 
 #include "slam2d/core/angles.hpp"
@@ -85,6 +86,12 @@ void add_sensor_options(CLI::App* command, LogReaderOptions& options, const std:
   command->add_option("--imu-topic", options.bag.imu_topic, "bags: the Imu topic (default: the only one)");
   command->add_option("--base-frame", options.bag.base_frame, "bags: the robot's frame (default: the odometry's child frame)");
   command->add_option("--odom-frame", options.bag.odom_frame, "bags: the odometry frame (default: the odometry's frame)");
+  command->add_option("--scan-odometry", options.bag.scan_odometry,
+                      "bags: each scan's odometry pose: interpolated at its stamp, or the latest reading recorded before "
+                      "it (as CARMEN's logger wrote FLASER; for logs whose stamps are wrong)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, OdometryAtScan>{{"interpolated", OdometryAtScan::kInterpolated},
+                                                                               {"latest", OdometryAtScan::kLatest}}))
+      ->default_str("interpolated");
 }
 
 std::vector<std::string> reader_warnings(const LogReader& reader) {

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <memory>
 #include <string>
 #include <utility>
@@ -113,6 +114,96 @@ TEST(BagLog, StampsThatStepBackKeepTheBagsOrderAndTheirOwnOdometry) {
   EXPECT_NEAR(xs[0], 1.5, 1e-12);  // between the readings at 1 and 2 s (1 s arrived after it)
   EXPECT_NEAR(xs[1], 0.5, 1e-12);
   EXPECT_NEAR(xs[2], 2.5, 1e-12);
+}
+
+// A reading whose stamp is wrong (recorded before the reading at 1 s, stamped 1.4 s): a scan at
+// 1.5 s recorded between the readings at 1 and 2 s is interpolated between those two, not between
+// the reading stamped 1.4 s and the one at 2 s (the Intel log's clock steps back).
+std::vector<DecodedRecord> a_reading_with_a_wrong_stamp() {
+  return {odometry(0.0, SE2()), odometry(1.4, SE2(0.5, 0.0, 0.0)), odometry(1.0, SE2(1.0, 0.0, 0.0)), scan(1.5),
+          odometry(2.0, SE2(2.0, 0.0, 0.0))};
+}
+
+double odometry_x_of_the_scan(BagLogReader& reader) {
+  for (const SensorMessage& message : read_all(reader)) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->odom_pose.x();
+  }
+  return std::nan("");
+}
+
+TEST(BagLog, TheReadingsRecordedAroundAScanBeatAStampFromElsewhere) {
+  BagLogReader interpolated(std::make_unique<FakeSource>(kTopics, a_reading_with_a_wrong_stamp()));
+  EXPECT_NEAR(odometry_x_of_the_scan(interpolated), 1.5, 1e-12);
+  BagLogReader latest(std::make_unique<FakeSource>(kTopics, a_reading_with_a_wrong_stamp()),
+                      BagSelection{.scan_odometry = OdometryAtScan::kLatest});
+  EXPECT_NEAR(odometry_x_of_the_scan(latest), 1.0, 1e-12) << "the reading recorded just before the scan";
+}
+
+// A scan recorded after a reading stamped later than it (topics interleave): interpolated at its
+// stamp between the readings around it in time.
+TEST(BagLog, AScanRecordedLateIsInterpolatedAtItsStamp) {
+  BagLogReader reader(std::make_unique<FakeSource>(
+      kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), odometry(1.0, SE2(1.0, 0.0, 0.0)),
+                                          odometry(2.0, SE2(2.0, 0.0, 0.0)), scan(0.25), odometry(3.0, SE2(3.0, 0.0, 0.0))}));
+  EXPECT_NEAR(odometry_x_of_the_scan(reader), 0.25, 1e-12);
+}
+
+TEST(BagLog, GeometryOverridesReplaceWhatTheScanDeclares) {
+  ScanGeometryOverrides fov;
+  fov.field_of_view = 0.6;  // 3 beams, odd: 2 steps of 0.3, from -0.3
+  BagLogReader reader(std::make_unique<FakeSource>(kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), scan(0.0)}),
+                      BagSelection{}, fov);
+  const LaserScan& laser = std::get<LaserMessage>(read_all(reader).back()).scan;
+  EXPECT_NEAR(laser.angle_min, -0.3, 1e-15);
+  EXPECT_NEAR(laser.angle_increment, 0.3, 1e-15);
+  EXPECT_EQ(laser.range_max, 30.0) << "not overridden: as declared";
+
+  ScanGeometryOverrides bad;
+  bad.angle_increment = -0.1;
+  EXPECT_THROW(BagLogReader(std::make_unique<FakeSource>(kTopics, std::vector<DecodedRecord>{}), BagSelection{}, bad), Error);
+}
+
+// The Intel bag's case: 180 beams declared over exactly 180 deg; CARMEN's 180 beams of 1 deg are
+// -90 .. +89 deg, which --fov 180 gives back.
+TEST(ScanGeometry, AFieldOfViewOverEvenBeamsIsCarmensSpacing) {
+  LaserScan scan;
+  scan.ranges.assign(180, 1.0);
+  scan.angle_min = -std::numbers::pi / 2;
+  scan.angle_increment = std::numbers::pi / 179;
+  scan.range_max = 80.0;
+  ScanGeometryOverrides overrides;
+  overrides.field_of_view = std::numbers::pi;
+  overrides.range_max = 50.0;
+  apply_overrides(scan, overrides);
+  EXPECT_DOUBLE_EQ(scan.angle_increment, std::numbers::pi / 180);
+  EXPECT_DOUBLE_EQ(scan.angle_min, -std::numbers::pi / 2);
+  EXPECT_DOUBLE_EQ(scan.angle_max(), std::numbers::pi / 2 - std::numbers::pi / 180);
+  EXPECT_EQ(scan.range_max, 50.0);
+  ScanGeometryOverrides first_beam;
+  first_beam.angle_min = -1.0;
+  apply_overrides(scan, first_beam);
+  EXPECT_EQ(scan.angle_min, -1.0);
+  EXPECT_DOUBLE_EQ(scan.angle_increment, std::numbers::pi / 180) << "kept";
+  EXPECT_EQ(beam_steps(181), 180u);
+  EXPECT_EQ(beam_steps(180), 180u);
+  EXPECT_EQ(beam_steps(1), 1u);
+}
+
+TEST(BagLog, ImuReadingsPassThrough) {
+  std::vector<BagTopic> topics = kTopics;
+  topics.push_back({"/imu", "sensor_msgs/msg/Imu", 0, 0.0, 0.0});
+  BagLogReader reader(std::make_unique<FakeSource>(
+      topics, std::vector<DecodedRecord>{odometry(0.0, SE2()),
+                                         {"/imu", 0.5, 0, DecodedImu{0.5, "imu_link", 0.01, -0.02, 0.3}}}));
+  const std::vector<SensorMessage> messages = read_all(reader);
+  ASSERT_EQ(messages.size(), 2u);
+  const ImuReading& imu = std::get<ImuMessage>(messages[1]).reading;
+  EXPECT_EQ(imu.stamp, 0.5);
+  EXPECT_EQ(imu.roll, 0.01);
+  EXPECT_EQ(imu.pitch, -0.02);
+  EXPECT_EQ(imu.yaw_rate, 0.3);
+  EXPECT_EQ(stamp_of(messages[1]), 0.5);
+  EXPECT_EQ(reader.choice().imu_topic, "/imu");
 }
 
 TEST(BagLog, AStaticTransformTheOtherWayRoundIsInverted) {

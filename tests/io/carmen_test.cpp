@@ -50,7 +50,7 @@ const LaserMessage& laser(const ReadResult& result, std::size_t i) {
 
 void write_messages(CarmenWriter& writer, const std::vector<SensorMessage>& messages) {
   for (const SensorMessage& message : messages) {
-    std::visit([&writer](const auto& m) { writer.write(m); }, message);
+    writer.write(message);
   }
 }
 

@@ -181,7 +181,7 @@ TEST(CarmenRealData, WholeLogWriteReadIsExact) {
   {
     CarmenReader reader(source);
     CarmenWriter writer(copy_path);
-    while (auto message = reader.next()) std::visit([&writer](const auto& m) { writer.write(m); }, *message);
+    while (auto message = reader.next()) writer.write(*message);
     writer.commit();
   }
   CarmenReader original(source);

@@ -41,17 +41,6 @@ std::vector<T> messages_of(const SimulatedRun& run) {
   return result;
 }
 
-double stamp_of(const SensorMessage& m) {
-  return std::visit(
-      [](const auto& typed) -> double {
-        using T = std::decay_t<decltype(typed)>;
-        if constexpr (std::is_same_v<T, LaserMessage>) return typed.scan.stamp;
-        if constexpr (std::is_same_v<T, OdometryMessage>) return typed.reading.stamp;
-        if constexpr (std::is_same_v<T, TruePoseMessage>) return typed.stamp;
-      },
-      m);
-}
-
 bool same_pose(const SE2& a, const SE2& b) { return a.vector() == b.vector(); }
 
 bool same_message(const SensorMessage& a, const SensorMessage& b) {

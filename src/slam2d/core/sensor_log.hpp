@@ -2,7 +2,7 @@
 #pragma once
 // The format-neutral sensor log: what every log reader produces (io/carmen.hpp today) and what
 // the simulator, the fault injector and every method consume. Scans with the odometry pose at
-// each, odometry readings and true poses, each stamped, in the order the source gave them.
+// each, odometry readings, true poses and IMU readings, each stamped, in the order the source gave them.
 
 #include <cstddef>
 #include <string>
@@ -36,7 +36,23 @@ struct OdometryMessage {
   std::size_t line = 0;
 };
 
+/// An inertial reading made planar: the attitude's roll and pitch (for levelling) and the yaw rate.
+struct ImuReading {
+  double stamp = 0.0;     // s
+  double roll = 0.0;      // rad
+  double pitch = 0.0;     // rad
+  double yaw_rate = 0.0;  // rad/s, about the robot's z axis
+};
+
+struct ImuMessage {
+  ImuReading reading;
+  std::size_t line = 0;
+};
+
 /// One message of a sensor log, in the order the source gave it.
-using SensorMessage = std::variant<LaserMessage, OdometryMessage, TruePoseMessage>;
+using SensorMessage = std::variant<LaserMessage, OdometryMessage, TruePoseMessage, ImuMessage>;
+
+/// The stamp of any message.
+double stamp_of(const SensorMessage& message);
 
 }  // namespace slam2d

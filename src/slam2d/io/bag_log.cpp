@@ -2,6 +2,7 @@
 #include "slam2d/io/bag_log.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -12,6 +13,7 @@ namespace {
 
 constexpr std::size_t kOdometryWindow = 64;     // recent readings kept for the interpolation
 constexpr std::size_t kMaxPendingScans = 256;  // scans held waiting for the odometry to pass them
+constexpr std::size_t kNeighbours = 8;          // readings each side of a scan in the file searched by stamp
 constexpr const char* kLaserScan = "sensor_msgs/LaserScan";
 constexpr const char* kOdometry = "nav_msgs/Odometry";
 constexpr const char* kImu = "sensor_msgs/Imu";
@@ -69,10 +71,12 @@ BagChoice choose_topics(const std::string& path, const std::vector<BagTopic>& to
 BagLogReader::BagLogReader(std::unique_ptr<BagSource> source, BagSelection selection, ScanGeometryOverrides geometry)
     : source_(std::move(source)),
       choice_(choose_topics(source_->path(), source_->topics(), selection)),
-      geometry_(geometry) {
+      geometry_(geometry),
+      scan_odometry_(selection.scan_odometry) {
   check_overrides(geometry_, source_->path());
   wanted_ = {choice_.scan_topic};
   if (!choice_.odom_topic.empty()) wanted_.push_back(choice_.odom_topic);
+  if (!choice_.imu_topic.empty()) wanted_.push_back(choice_.imu_topic);
   if (has_topic(source_->topics(), "/tf_static", kTf)) wanted_.push_back("/tf_static");
   if (choice_.odom_topic == "/tf" && (choice_.base_frame.empty() || choice_.odom_frame.empty())) {
     if (choice_.base_frame.empty()) choice_.base_frame = "base_link";
@@ -119,8 +123,8 @@ void BagLogReader::take(DecodedRecord record) {
       choice_.laser_frame = scan->frame_id;
       resolve_mounting();
     }
-    pending_scans_.emplace_back(std::move(*scan), record.index);
-    if (!has_odometry_ && choice_.odom_topic.empty()) release_scans_up_to(pending_scans_.back().first.scan.stamp);
+    pending_scans_.push_back({std::move(*scan), record.index, odometry_seen_});
+    if (!has_odometry_ && choice_.odom_topic.empty()) release_scans_up_to(std::numeric_limits<double>::infinity());
     return;
   }
   if (auto* transforms = std::get_if<DecodedTransforms>(&record.message)) {
@@ -136,6 +140,11 @@ void BagLogReader::take(DecodedRecord record) {
     }
     return;
   }
+  if (const auto* imu = std::get_if<DecodedImu>(&record.message)) {
+    ready_.push_back(ImuMessage{{.stamp = imu->stamp, .roll = imu->roll, .pitch = imu->pitch, .yaw_rate = imu->yaw_rate},
+                                record.index});
+    return;
+  }
   if (auto* odometry = std::get_if<DecodedOdometry>(&record.message)) {
     if (choice_.base_frame.empty()) choice_.base_frame = odometry->child_frame_id.empty() ? "base_link" : odometry->child_frame_id;
     if (choice_.odom_frame.empty()) choice_.odom_frame = odometry->frame_id.empty() ? "odom" : odometry->frame_id;
@@ -146,6 +155,7 @@ void BagLogReader::take(DecodedRecord record) {
 
 void BagLogReader::add_odometry(const OdometryReading& reading) {
   odometry_.push_back(reading);
+  ++odometry_seen_;
   if (odometry_.size() > kOdometryWindow) odometry_.pop_front();
   latest_odometry_stamp_ = has_odometry_ ? std::max(latest_odometry_stamp_, reading.stamp) : reading.stamp;
   has_odometry_ = true;
@@ -166,16 +176,42 @@ void BagLogReader::resolve_mounting() {
   }
 }
 
-std::optional<SE2> BagLogReader::odometry_at(double stamp) const {
-  // The readings just before and just after `stamp` among the recent ones (the bag's order need
-  // not be time order: recorded logs with stamps that step back).
+std::optional<SE2> BagLogReader::odometry_at(double stamp, std::size_t readings_before) const {
+  if (odometry_.empty()) return std::nullopt;
+  const std::size_t first = odometry_seen_ - odometry_.size();  // the bag index of odometry_.front()
+  const auto reading = [&](std::size_t bag_index) -> const OdometryReading& { return odometry_[bag_index - first]; };
+  const bool has_previous = readings_before > first && readings_before <= odometry_seen_;
+  const bool has_next = readings_before >= first && readings_before < odometry_seen_;
+  if (scan_odometry_ == OdometryAtScan::kLatest) {
+    if (has_previous) return reading(readings_before - 1).pose;
+    return readings_before <= first ? odometry_.front().pose : odometry_.back().pose;
+  }
+  // The readings recorded just before and just after the scan, when their stamps bracket it: the
+  // recording order is the order things happened, even where stamps are wrong (the Intel log's clock
+  // steps back up to 0.9 s: a reading from before the step can carry a later stamp than a scan after it).
+  if (has_previous && has_next) {
+    const OdometryReading& previous = reading(readings_before - 1);
+    const OdometryReading& next = reading(readings_before);
+    if (previous.stamp <= stamp && stamp <= next.stamp) {
+      return next.stamp > previous.stamp
+                 ? interpolate(previous.pose, next.pose, (stamp - previous.stamp) / (next.stamp - previous.stamp))
+                 : previous.pose;
+    }
+  }
+  // Otherwise (a scan recorded a little before or after the readings around its stamp, as topics
+  // interleave), the readings just before and just after its stamp among its neighbours in the bag.
+  const std::size_t low = std::max(first, readings_before > kNeighbours ? readings_before - kNeighbours : std::size_t{0});
+  const std::size_t high = std::min(odometry_seen_, readings_before + kNeighbours);
   const OdometryReading* before = nullptr;
   const OdometryReading* after = nullptr;
-  for (const OdometryReading& reading : odometry_) {
-    if (reading.stamp <= stamp && (before == nullptr || reading.stamp >= before->stamp)) before = &reading;
-    if (reading.stamp >= stamp && (after == nullptr || reading.stamp < after->stamp)) after = &reading;
+  for (std::size_t i = low; i < high; ++i) {
+    const OdometryReading& r = reading(i);
+    if (r.stamp <= stamp && (before == nullptr || r.stamp >= before->stamp)) before = &r;
+    if (r.stamp >= stamp && (after == nullptr || r.stamp < after->stamp)) after = &r;
   }
-  if (before == nullptr && after == nullptr) return std::nullopt;
+  if (before == nullptr && after == nullptr) {  // no neighbour left: the nearest reading in the bag
+    return readings_before <= first ? odometry_.front().pose : odometry_.back().pose;
+  }
   if (before == nullptr) return after->pose;
   if (after == nullptr || !(after->stamp > before->stamp)) return before->pose;
   return interpolate(before->pose, after->pose, (stamp - before->stamp) / (after->stamp - before->stamp));
@@ -183,26 +219,29 @@ std::optional<SE2> BagLogReader::odometry_at(double stamp) const {
 
 void BagLogReader::release_scans_up_to(double stamp) {
   // In the bag's order: a scan waits for the odometry to pass its stamp (so that it can be
-  // interpolated), and never holds more than kMaxPendingScans behind it.
+  // interpolated) and for the reading recorded after it, and never holds more than
+  // kMaxPendingScans behind it.
   while (!pending_scans_.empty() &&
-         (pending_scans_.front().first.scan.stamp <= stamp || pending_scans_.size() > kMaxPendingScans)) {
-    ready_.push_back(to_laser(pending_scans_.front().first, pending_scans_.front().second));
+         ((pending_scans_.front().scan.scan.stamp <= stamp && pending_scans_.front().readings_before < odometry_seen_) ||
+          std::isinf(stamp) || pending_scans_.size() > kMaxPendingScans)) {
+    ready_.push_back(to_laser(pending_scans_.front()));
     pending_scans_.pop_front();
   }
 }
 
-LaserMessage BagLogReader::to_laser(const DecodedScan& scan, std::size_t index) const {
+LaserMessage BagLogReader::to_laser(const PendingScan& pending) const {
+  const DecodedScan& scan = pending.scan;
   LaserMessage laser;
   laser.type = "LaserScan";
   laser.scan = scan.scan;
   apply_overrides(laser.scan, geometry_);
   laser.scan.T_robot_sensor = choice_.T_base_laser.value_or(SE2());
   laser.field_of_view = laser.scan.angle_max() - laser.scan.angle_min;  // as the message declares it, or overridden
-  const std::optional<SE2> odom = odometry_at(scan.scan.stamp);
+  const std::optional<SE2> odom = odometry_at(scan.scan.stamp, pending.readings_before);
   laser.has_poses = odom.has_value();
   laser.odom_pose = odom.value_or(SE2());
   laser.laser_pose = laser.odom_pose * laser.scan.T_robot_sensor;
-  laser.line = index;
+  laser.line = pending.index;
   return laser;
 }
 

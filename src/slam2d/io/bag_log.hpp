@@ -10,13 +10,16 @@
 // - The laser's mounting T_robot_sensor: base frame -> the scan's frame_id through the static
 //   transforms (/tf_static; a chain of them, either direction). Unknown: the robot's origin,
 //   with a warning.
-// - Each scan's odometry pose (LaserMessage::odom_pose): the odometry interpolated at the scan's
-//   stamp (held at the first/last reading outside their span): CARMEN's FLASER carries it, a bag
-//   carries the odometry on its own topic.
+// - Each scan's odometry pose (LaserMessage::odom_pose; CARMEN's FLASER carries it, a bag carries
+//   the odometry on its own topic): by default interpolated at the scan's stamp between the readings
+//   recorded just before and after it, when their stamps bracket it; else between the readings just
+//   before and after its stamp among its neighbours in the bag's order (held at the first/last
+//   reading outside their span). Or (OdometryAtScan::kLatest) the latest reading recorded before it.
 // - The scans' geometry as the messages declare it, or as ScanGeometryOverrides says (a converter
 //   that declared 180 deg for a 179 deg sensor).
 // - Ranges as published: NaN, +-inf and values outside [range_min, range_max] are "no return"
 //   (LaserScan::is_valid), never errors.
+// - IMU readings (ImuMessage) from the Imu topic, as they come.
 // Messages come out in the bag's order (each reader's: see its header), each scan once the
 // odometry has passed its stamp.
 
@@ -33,8 +36,14 @@
 
 namespace slam2d {
 
+/// Each scan's odometry pose: interpolated at its stamp (what tf does), or the latest reading
+/// recorded before it (what CARMEN's logger wrote into FLASER: for logs whose stamps are less
+/// trustworthy than their recording order).
+enum class OdometryAtScan { kInterpolated, kLatest };
+
 /// Which topics and frames make the sensor log; empty: automatic (unambiguous) choice.
 struct BagSelection {
+  OdometryAtScan scan_odometry = OdometryAtScan::kInterpolated;
   std::string scan_topic = {};
   std::string odom_topic = {};
   std::string imu_topic = {};
@@ -78,8 +87,13 @@ class BagLogReader {
   void read_more();
   void take(DecodedRecord record);
   void release_scans_up_to(double stamp);
-  LaserMessage to_laser(const DecodedScan& scan, std::size_t index) const;
-  std::optional<SE2> odometry_at(double stamp) const;
+  struct PendingScan {
+    DecodedScan scan;
+    std::size_t index = 0;            // in the bag's order
+    std::size_t readings_before = 0;  // odometry readings before it in the bag's order
+  };
+  LaserMessage to_laser(const PendingScan& pending) const;
+  std::optional<SE2> odometry_at(double stamp, std::size_t readings_before) const;
   void add_odometry(const OdometryReading& reading);
   void add_static(const DecodedTransform& transform);
   void resolve_mounting();  // T_base_laser from the static transforms seen so far
@@ -87,11 +101,13 @@ class BagLogReader {
   std::unique_ptr<BagSource> source_;
   BagChoice choice_;
   ScanGeometryOverrides geometry_;
+  OdometryAtScan scan_odometry_;
   std::vector<std::string> wanted_;
   std::vector<DecodedTransform> static_transforms_;
   std::deque<OdometryReading> odometry_;  // the recent readings, in the bag's order
+  std::size_t odometry_seen_ = 0;         // readings so far
   double latest_odometry_stamp_ = 0.0;    // the largest odometry stamp so far
-  std::deque<std::pair<DecodedScan, std::size_t>> pending_scans_;  // scans waiting for the next reading
+  std::deque<PendingScan> pending_scans_;  // scans waiting for the next reading
   std::deque<SensorMessage> ready_;
   bool finished_ = false;
   bool has_odometry_ = false;

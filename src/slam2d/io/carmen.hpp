@@ -164,6 +164,8 @@ class CarmenWriter {
   void write(const LaserMessage& message);
   void write(const OdometryMessage& message);
   void write(const TruePoseMessage& message);
+  /// Any message; false for one CARMEN has no line for (an IMU reading), which is not written.
+  bool write(const SensorMessage& message);
   void commit();
 
  private:

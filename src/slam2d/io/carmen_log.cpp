@@ -77,7 +77,7 @@ void write_carmen_log(const std::string& path, const std::vector<std::string>& c
         declared[rear] = geometry;
       }
     }
-    std::visit([&writer](const auto& m) { writer.write(m); }, message);
+    writer.write(message);
   }
   writer.commit();
 }

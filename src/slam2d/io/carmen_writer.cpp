@@ -16,6 +16,8 @@
 #include <charconv>
 #include <cmath>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/atomic_file.hpp"
@@ -194,6 +196,14 @@ void CarmenWriter::write(const TruePoseMessage& message) {
   impl_->pose(message.true_pose, "true pose");
   impl_->pose(message.odom_pose, "odometry pose");
   impl_->finish(message.stamp);
+}
+
+bool CarmenWriter::write(const SensorMessage& message) {
+  if (std::holds_alternative<ImuMessage>(message)) return false;
+  std::visit([this](const auto& m) {
+    if constexpr (!std::is_same_v<std::decay_t<decltype(m)>, ImuMessage>) write(m);
+  }, message);
+  return true;
 }
 
 void CarmenWriter::commit() {

@@ -60,4 +60,13 @@ double LogReader::progress() const { return carmen_ ? carmen_->progress() : bag_
 const std::string& LogReader::path() const { return carmen_ ? carmen_->path() : bag_->path(); }
 CarmenStats LogReader::stats() const { return carmen_ ? carmen_->stats() : CarmenStats{}; }
 
+std::vector<SensorMessage> read_all(LogReader& reader, const std::function<void(double, std::size_t)>& progress) {
+  std::vector<SensorMessage> messages;
+  while (auto message = reader.next()) {
+    messages.push_back(std::move(*message));
+    if (progress && messages.size() % 4096 == 0) progress(reader.progress(), messages.size());
+  }
+  return messages;
+}
+
 }  // namespace slam2d

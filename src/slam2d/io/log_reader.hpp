@@ -5,6 +5,8 @@
 // storage), told apart by content (the bag magics, metadata.yaml), not by name. What every command
 // that reads a log uses.
 
+#include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,5 +53,9 @@ class LogReader {
   std::unique_ptr<CarmenReader> carmen_;
   std::unique_ptr<BagLogReader> bag_;
 };
+
+/// Every message left in `reader`; `progress(fraction, messages so far)` every 4096 messages.
+std::vector<SensorMessage> read_all(LogReader& reader,
+                                    const std::function<void(double, std::size_t)>& progress = {});
 
 }  // namespace slam2d

@@ -209,18 +209,13 @@ Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.
 // ---------------------------------------------------------------------------------------------
 // Messages: stamps, odometry chains, laser lines.
 
-double stamp_of(const SensorMessage& message) {
-  if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->scan.stamp;
-  if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.stamp;
-  return std::get<TruePoseMessage>(message).stamp;
-}
-
 enum Chain : std::size_t { kLaserChain = 0, kOdomChain = 1 };
 
 std::optional<Chain> chain_of(const SensorMessage& message) {
   if (const auto* laser = std::get_if<LaserMessage>(&message)) {
     return laser->has_poses ? std::optional<Chain>(kLaserChain) : std::nullopt;
   }
+  if (std::holds_alternative<ImuMessage>(message)) return std::nullopt;  // no pose
   return std::holds_alternative<OdometryMessage>(message) ? kOdomChain : kLaserChain;
 }
 

@@ -5,8 +5,10 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
 
@@ -191,7 +193,109 @@ DecodedImu read_imu(CdrReader& in) {
   return out;
 }
 
+static_assert(std::endian::native == std::endian::little, "CdrWriter writes native little-endian primitives");
+
+void write_laser_scan(CdrWriter& out, const DecodedScan& message) {
+  const LaserScan& scan = message.scan;
+  out.header(scan.stamp, message.frame_id);
+  out.put(static_cast<float>(scan.angle_min)).put(static_cast<float>(scan.angle_max()));
+  out.put(static_cast<float>(scan.angle_increment)).put(0.0f).put(0.0f);  // time_increment, scan_time
+  out.put(static_cast<float>(scan.range_min)).put(static_cast<float>(scan.range_max));
+  out.count(scan.ranges.size());
+  for (double range : scan.ranges) out.put(static_cast<float>(range));
+  out.count(scan.intensities.size());
+  for (double intensity : scan.intensities) out.put(static_cast<float>(intensity));
+}
+
+void write_odometry(CdrWriter& out, const DecodedOdometry& message) {
+  out.header(message.reading.stamp, message.frame_id).string(message.child_frame_id);
+  out.pose(message.reading.pose).zeros(36);              // pose, covariance
+  out.put(message.reading.tv).zeros(2).zeros(2).put(message.reading.rv);  // twist: linear, angular
+  out.zeros(36);                                         // twist covariance
+}
+
+void write_tf_message(CdrWriter& out, const DecodedTransforms& message) {
+  out.count(message.transforms.size());
+  for (const DecodedTransform& transform : message.transforms) {
+    out.header(transform.stamp, transform.parent).string(transform.child).pose(transform.T_parent_child);
+  }
+}
+
+void write_imu(CdrWriter& out, const DecodedImu& message) {
+  out.header(message.stamp, message.frame_id);
+  const RosQuaternion q = RosQuaternion::from_euler(message.roll, message.pitch, 0.0);
+  out.put(q.x).put(q.y).put(q.z).put(q.w).zeros(9);  // orientation, covariance
+  out.zeros(2).put(message.yaw_rate).zeros(9);       // angular velocity, covariance
+  out.zeros(3 + 9);                                  // linear acceleration, covariance
+}
+
 }  // namespace
+
+CdrWriter& CdrWriter::string(std::string_view text) {
+  count(text.size() + 1);
+  bytes_.insert(bytes_.end(), text.begin(), text.end());
+  bytes_.push_back(0);
+  return *this;
+}
+
+CdrWriter& CdrWriter::count(std::size_t n) {
+  if (n > std::numeric_limits<std::uint32_t>::max()) throw Error("CDR: a sequence of " + std::to_string(n) + " elements");
+  return put(static_cast<std::uint32_t>(n));
+}
+
+CdrWriter& CdrWriter::time(double stamp) {
+  const double sec = std::floor(stamp);
+  if (!std::isfinite(stamp) || sec < std::numeric_limits<std::int32_t>::min() || sec > std::numeric_limits<std::int32_t>::max()) {
+    throw Error("CDR: stamp " + std::to_string(stamp) + " s does not fit builtin_interfaces/Time");
+  }
+  auto nanosec = static_cast<std::int64_t>(std::llround((stamp - sec) * 1e9));
+  auto whole = static_cast<std::int64_t>(sec);
+  if (nanosec >= 1'000'000'000) {  // rounded up to the next second
+    nanosec -= 1'000'000'000;
+    ++whole;
+  }
+  return put(static_cast<std::int32_t>(whole)).put(static_cast<std::uint32_t>(nanosec));
+}
+
+CdrWriter& CdrWriter::header(double stamp, std::string_view frame_id) { return time(stamp).string(frame_id); }
+
+CdrWriter& CdrWriter::zeros(std::size_t doubles) {
+  for (std::size_t i = 0; i < doubles; ++i) put(0.0);
+  return *this;
+}
+
+CdrWriter& CdrWriter::pose(const SE2& pose) {
+  const RosQuaternion q = RosQuaternion::from_yaw(pose.theta());
+  return put(pose.x()).put(pose.y()).put(0.0).put(q.x).put(q.y).put(q.z).put(q.w);
+}
+
+CdrWriter& CdrWriter::raw(const std::uint8_t* data, std::size_t size) {
+  bytes_.insert(bytes_.end(), data, data + size);
+  return *this;
+}
+
+const char* ros2_type_name(const DecodedMessage& message) {
+  struct Name {
+    const char* operator()(const DecodedScan&) const { return "sensor_msgs/msg/LaserScan"; }
+    const char* operator()(const DecodedOdometry&) const { return "nav_msgs/msg/Odometry"; }
+    const char* operator()(const DecodedTransforms&) const { return "tf2_msgs/msg/TFMessage"; }
+    const char* operator()(const DecodedImu&) const { return "sensor_msgs/msg/Imu"; }
+  };
+  return std::visit(Name{}, message);
+}
+
+std::vector<std::uint8_t> encode_cdr(const DecodedMessage& message) {
+  CdrWriter out;
+  struct Encode {
+    CdrWriter& out;
+    void operator()(const DecodedScan& m) const { write_laser_scan(out, m); }
+    void operator()(const DecodedOdometry& m) const { write_odometry(out, m); }
+    void operator()(const DecodedTransforms& m) const { write_tf_message(out, m); }
+    void operator()(const DecodedImu& m) const { write_imu(out, m); }
+  };
+  std::visit(Encode{out}, message);
+  return out.take();
+}
 
 std::optional<Ros2Type> ros2_type(const std::string& name) {
   if (name == "sensor_msgs/msg/LaserScan") return Ros2Type::kLaserScan;
