@@ -18,6 +18,7 @@
 #include "json.hpp"
 #include "odometry_report.hpp"
 #include "progress.hpp"
+#include "run_mcap_output.hpp"
 #include "run_stats.hpp"
 #include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
@@ -51,6 +52,7 @@ struct LocalizeOptions {
   LogReaderOptions input;  // CARMEN geometry overrides, bag topics and frames (sensor_options.hpp)
   std::string out;
   std::string trajectory_format = "text";  // text | tum
+  std::string mcap;                        // when set: the run for Foxglove (io/run_mcap.hpp)
   bool json = false;
   bool quiet = false;
 };
@@ -124,7 +126,8 @@ std::unique_ptr<Localizer> make_localizer(const LocalizeOptions& options, const 
 
 void run_localize(const LocalizeOptions& options) {
   const RunClock clock;
-  const LocalizationMap map(read_map(options.map));
+  const OccupancyMap occupancy = read_map(options.map);
+  const LocalizationMap map(occupancy);
   JsonObject settings;
   std::unique_ptr<Localizer> localizer = make_localizer(options, map, settings);
   std::optional<Kidnap> kidnap;
@@ -154,6 +157,7 @@ void run_localize(const LocalizeOptions& options) {
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   write_trajectory(options.out, session.trajectory(), trajectory_format_from_name(options.trajectory_format));
+  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, true, occupancy, session.trajectory());
 
   const double cpu = clock.cpu_seconds();
   JsonObject summary;
@@ -204,6 +208,8 @@ void add_localize_command(CLI::App& app) {
       ->capture_default_str();
   add_sensor_options(command, options->input);
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
+  command->add_option("--mcap", options->mcap,
+                      "Also write the run for Foxglove: map, path, poses, scans (and in the map frame), tf (MCAP, ROS 2 types)");
   command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();

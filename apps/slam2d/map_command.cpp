@@ -34,6 +34,8 @@ void add_map_command(CLI::App& app) {
   command->add_option("--format", options->trajectory_format, "trajectory.txt as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();
+  command->add_option("--mcap", options->mcap,
+                      "Also write the run for Foxglove: map, path, poses, scans (and in the map frame), tf (MCAP, ROS 2 types)");
   command->add_option("--trajectory-frame", options->trajectory_frame,
                       "robot: the robot's (base frame's) pose; sensor: the laser's (the robot's pose times the laser's mounting)")
       ->check(CLI::IsMember({"robot", "sensor"}))

@@ -8,6 +8,7 @@
 
 #include "odometry_report.hpp"
 #include "progress.hpp"
+#include "run_mcap_output.hpp"
 #include "run_stats.hpp"
 #include "sensor_options.hpp"
 #include "slam2d/core/error.hpp"
@@ -232,6 +233,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());
   summary.add("warnings", run.warnings);
+  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, false, run.map, run.trajectory);
   if (options.trajectory_frame == "sensor") {  // the laser's pose: what a benchmark's relations may describe
     Trajectory sensor;
     sensor.reserve(run.trajectory.size());

@@ -20,6 +20,7 @@ struct MapJobOptions {
   std::string method = "odometry";  // odometry, hector, graph, rbpf
   std::string trajectory_format = "text";  // trajectory.txt as slam2d text or TUM (evo)
   std::string trajectory_frame = "robot";  // robot (base) | sensor: the laser's pose, T_robot_sensor of the first scan applied
+  std::string mcap;                 // when set: the run for Foxglove (io/run_mcap.hpp) written there too
   std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
   bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
   // Overrides of the method's config (preset or defaults) when set:
