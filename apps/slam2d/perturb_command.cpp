@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// slam2d perturb LOG --out LOG2 --fault KIND[:key=value,...] ... --seed N: a CARMEN log with
-// injected faults (sim/fault_injection.hpp, docs/faults.md), written atomically.
+// slam2d perturb LOG --out LOG2 --fault KIND[:key=value,...] ... --seed N: a log (CARMEN or bag)
+// with injected faults (sim/fault_injection.hpp, docs/faults.md), written atomically in the format
+// LOG2's name asks for (io/log_writer.hpp).
 
 #include <fmt/core.h>
 
@@ -15,8 +16,8 @@
 #include "json.hpp"
 #include "progress.hpp"
 #include "slam2d/core/error.hpp"
-#include "slam2d/io/carmen.hpp"
-#include "slam2d/io/carmen_log.hpp"
+#include "slam2d/io/log_reader.hpp"
+#include "slam2d/io/log_writer.hpp"
 #include "slam2d/sim/fault_injection.hpp"
 
 namespace slam2d::cli {
@@ -49,15 +50,10 @@ MessageCounts count_messages(const std::vector<SensorMessage>& messages) {
 }
 
 std::vector<SensorMessage> read_log(const std::string& path, Progress& progress) {
-  CarmenReaderOptions as_logged;
-  as_logged.repair_reverse_odometry = false;  // faults are injected into the log as it is
-  CarmenReader reader(path, as_logged);
-  std::vector<SensorMessage> messages;
-  while (auto message = reader.next()) {
-    messages.push_back(std::move(*message));
-    if (messages.size() % 4096 == 0) progress.update(reader.progress(), fmt::format("{} messages read", messages.size()));
-  }
-  return messages;
+  LogReaderOptions as_logged;
+  as_logged.carmen.repair_reverse_odometry = false;  // faults are injected into the log as it is
+  LogReader reader(path, as_logged);
+  return read_all(reader, [&](double fraction, std::size_t n) { progress.update(fraction, fmt::format("{} messages read", n)); });
 }
 
 JsonObject counts_json(const MessageCounts& counts) {
@@ -81,7 +77,7 @@ void run_perturb(const PerturbOptions& options) {
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   progress.update(-1.0, "writing");
-  write_carmen_log(options.out, comments, messages);
+  write_log(options.out, log_format_for_output(options.out), messages, comments);
   progress.finish();
 
   JsonObject summary;
@@ -108,9 +104,12 @@ void add_perturb_command(CLI::App& app) {
   auto options = std::make_shared<PerturbOptions>();
   std::string kinds;
   for (const std::string& kind : fault_kinds()) kinds += (kinds.empty() ? "" : ", ") + kind;
-  CLI::App* command = app.add_subcommand("perturb", "Write a CARMEN log with injected faults (docs/faults.md)");
-  command->add_option("log", options->log, "CARMEN log (plain or .gz)")->required();
-  command->add_option("--out", options->out, "Perturbed CARMEN log to write (.gz for gzip)")->required();
+  CLI::App* command = app.add_subcommand("perturb", "Write a log with injected faults (docs/faults.md)");
+  command->add_option("log", options->log, "Log: CARMEN (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder")->required();
+  command->add_option("--out", options->out,
+                      "Perturbed log to write; its name gives the format: .bag, .mcap, a rosbag2 folder (no extension), "
+                      "else CARMEN (.gz: gzip)")
+      ->required();
   command->add_option("--fault", options->faults, "KIND[:key=value,...], repeatable, applied in order; kinds: " + kinds)
       ->required()
       ->expected(1)
