@@ -11,6 +11,7 @@
 #include "slam2d/io/bag_sink.hpp"
 #include "slam2d/io/carmen_log.hpp"
 #include "slam2d/io/mcap_writer.hpp"
+#include "slam2d/io/ros1_bag_writer.hpp"
 #include "slam2d/io/rosbag2_writer.hpp"
 
 namespace slam2d {
@@ -44,7 +45,7 @@ LogWriteReport write_carmen(const std::string& path, const std::vector<SensorMes
 
 std::unique_ptr<BagSink> open_sink(const std::string& path, LogFormat format) {
   switch (format) {
-    case LogFormat::kRos1Bag: throw Error(path + ": PENDING ros1 writer");
+    case LogFormat::kRos1Bag: return open_ros1_bag_writer(path);
     case LogFormat::kMcap: return open_mcap_writer(path);
     case LogFormat::kRosbag2: return open_rosbag2_writer(path);
     case LogFormat::kCarmen: break;

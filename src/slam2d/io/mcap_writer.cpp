@@ -13,7 +13,7 @@
 #include "slam2d/io/detail/cdr.hpp"
 #include "slam2d/io/detail/compression.hpp"
 #include "slam2d/io/detail/mcap_records.hpp"
-#include "slam2d/io/detail/ros2_definitions.hpp"
+#include "slam2d/io/detail/message_definitions.hpp"
 
 namespace slam2d {
 namespace {
@@ -274,7 +274,7 @@ class McapBagSink final : public BagSink {
     if (channel == channels_.end()) {
       auto schema = schemas_.find(type);
       if (schema == schemas_.end()) {
-        schema = schemas_.emplace(type, writer_.add_schema(type, "ros2msg", detail::ros2msg_schema(type))).first;
+        schema = schemas_.emplace(type, writer_.add_schema(type, "ros2msg", detail::message_definition(type, detail::RosVersion::kRos2))).first;
       }
       channel = channels_.emplace(topic, std::make_pair(writer_.add_channel(topic, schema->second, "cdr"), type)).first;
     }

@@ -7,7 +7,7 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/detail/cdr.hpp"
-#include "slam2d/io/detail/ros2_definitions.hpp"
+#include "slam2d/io/detail/message_definitions.hpp"
 #include "slam2d/io/mcap_writer.hpp"
 
 namespace slam2d {
@@ -65,7 +65,7 @@ struct RunMcapWriter::Impl {
   std::uint16_t channel(const std::string& topic, const std::string& type) {
     auto schema = schemas.find(type);
     if (schema == schemas.end()) {
-      schema = schemas.emplace(type, writer.add_schema(type, "ros2msg", detail::ros2msg_schema(type))).first;
+      schema = schemas.emplace(type, writer.add_schema(type, "ros2msg", detail::message_definition(type, detail::RosVersion::kRos2))).first;
     }
     return writer.add_channel(topic, schema->second, "cdr");
   }

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <variant>
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
 
@@ -136,7 +137,99 @@ DecodedImu read_imu(WireReader& reader) {
   return out;
 }
 
+void write_header(WireWriter& out, std::uint32_t seq, double stamp, std::string_view frame_id) {
+  const Time time = to_time(stamp);
+  out.u32(seq).u32(time.sec).u32(time.nsec).string(frame_id);
+}
+
+void write_pose(WireWriter& out, const SE2& pose) {  // geometry_msgs/Pose or Transform, planar
+  const detail::RosQuaternion q = detail::RosQuaternion::from_yaw(pose.theta());
+  out.f64(pose.x()).f64(pose.y()).f64(0.0).f64(q.x).f64(q.y).f64(q.z).f64(q.w);
+}
+
+void write_zeros(WireWriter& out, std::size_t doubles) {
+  for (std::size_t i = 0; i < doubles; ++i) out.f64(0.0);
+}
+
+void write_float32_array(WireWriter& out, const std::vector<double>& values) {
+  out.u32(static_cast<std::uint32_t>(values.size()));
+  for (double value : values) out.f32(static_cast<float>(value));
+}
+
+struct Encode {
+  WireWriter& out;
+  std::uint32_t seq;
+  void operator()(const DecodedScan& m) const {
+    const LaserScan& scan = m.scan;
+    write_header(out, seq, scan.stamp, m.frame_id);
+    out.f32(static_cast<float>(scan.angle_min)).f32(static_cast<float>(scan.angle_max()));
+    out.f32(static_cast<float>(scan.angle_increment)).f32(0.0f).f32(0.0f);  // time_increment, scan_time
+    out.f32(static_cast<float>(scan.range_min)).f32(static_cast<float>(scan.range_max));
+    write_float32_array(out, scan.ranges);
+    write_float32_array(out, scan.intensities);
+  }
+  void operator()(const DecodedOdometry& m) const {
+    write_header(out, seq, m.reading.stamp, m.frame_id);
+    out.string(m.child_frame_id);
+    write_pose(out, m.reading.pose);
+    write_zeros(out, 36);                                        // pose covariance
+    out.f64(m.reading.tv);                                       // twist.linear.x
+    write_zeros(out, 4);                                         // linear y z, angular x y
+    out.f64(m.reading.rv);                                       // twist.angular.z
+    write_zeros(out, 36);                                        // twist covariance
+  }
+  void operator()(const DecodedTransforms& m) const {
+    out.u32(static_cast<std::uint32_t>(m.transforms.size()));
+    for (const DecodedTransform& transform : m.transforms) {
+      write_header(out, 0, transform.stamp, transform.parent);
+      out.string(transform.child);
+      write_pose(out, transform.T_parent_child);
+    }
+  }
+  void operator()(const DecodedImu& m) const {
+    write_header(out, seq, m.stamp, m.frame_id);
+    const detail::RosQuaternion q = detail::RosQuaternion::from_euler(m.roll, m.pitch, 0.0);
+    out.f64(q.x).f64(q.y).f64(q.z).f64(q.w);
+    write_zeros(out, 9 + 2);  // orientation covariance, angular_velocity x y
+    out.f64(m.yaw_rate);
+    write_zeros(out, 9 + 3 + 9);  // its covariance, linear_acceleration and its covariance
+  }
+};
+
 }  // namespace
+
+MessageType message_type_of(const DecodedMessage& message) {
+  struct Type {
+    MessageType operator()(const DecodedScan&) const { return MessageType::kLaserScan; }
+    MessageType operator()(const DecodedOdometry&) const { return MessageType::kOdometry; }
+    MessageType operator()(const DecodedTransforms&) const { return MessageType::kTFMessage; }
+    MessageType operator()(const DecodedImu&) const { return MessageType::kImu; }
+  };
+  return std::visit(Type{}, message);
+}
+
+std::string_view type_name(MessageType type) { return kTypes[static_cast<std::size_t>(type)].name; }
+
+Time to_time(double stamp) {
+  if (!(stamp >= 0.0) || !(stamp < 4294967296.0)) {
+    throw Error("stamp " + std::to_string(stamp) + " s does not fit a ROS 1 time (0 to 2^32 s)");
+  }
+  const double whole = std::floor(stamp);
+  auto sec = static_cast<std::uint64_t>(whole);
+  auto nsec = static_cast<std::uint64_t>(std::llround((stamp - whole) * 1e9));
+  if (nsec >= 1'000'000'000u) {
+    nsec -= 1'000'000'000u;
+    ++sec;
+  }
+  if (sec > 0xFFFFFFFFu) throw Error("stamp " + std::to_string(stamp) + " s does not fit a ROS 1 time");
+  return {static_cast<std::uint32_t>(sec), static_cast<std::uint32_t>(nsec)};
+}
+
+std::vector<std::uint8_t> encode_message(const DecodedMessage& message, std::uint32_t seq) {
+  WireWriter out;
+  std::visit(Encode{out, seq}, message);
+  return out.take();
+}
 
 std::optional<MessageType> message_type(std::string_view name) {
   for (const TypeInfo& info : kTypes) {

@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Little-endian reads over a byte span, each one checked against the bytes left: the one reader
-// for ROS 1 record headers, index data and serialized messages.
+// for ROS 1 record headers, index data and serialized messages; and the writer of the same.
 
 #include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "slam2d/core/error.hpp"
 
@@ -63,6 +65,36 @@ class WireReader {
 
   Bytes bytes_;
   std::size_t position_ = 0;
+};
+
+class WireWriter {
+ public:
+  WireWriter& u8(std::uint8_t v) {
+    bytes_.push_back(v);
+    return *this;
+  }
+  WireWriter& u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    return *this;
+  }
+  WireWriter& u64(std::uint64_t v) { return u32(static_cast<std::uint32_t>(v)).u32(static_cast<std::uint32_t>(v >> 32)); }
+  WireWriter& f32(float v) { return u32(std::bit_cast<std::uint32_t>(v)); }
+  WireWriter& f64(double v) { return u64(std::bit_cast<std::uint64_t>(v)); }
+  WireWriter& raw(Bytes data) {
+    bytes_.insert(bytes_.end(), data.begin(), data.end());
+    return *this;
+  }
+  /// ROS 1 string (or uint8[]): uint32 length, then the bytes.
+  WireWriter& string(std::string_view text) {
+    u32(static_cast<std::uint32_t>(text.size()));
+    return raw({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+  }
+  std::size_t size() const { return bytes_.size(); }
+  const std::vector<std::uint8_t>& bytes() const { return bytes_; }
+  std::vector<std::uint8_t> take() { return std::move(bytes_); }
+
+ private:
+  std::vector<std::uint8_t> bytes_;
 };
 
 }  // namespace slam2d::ros1

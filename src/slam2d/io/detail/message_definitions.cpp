@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "slam2d/io/detail/ros2_definitions.hpp"
+#include "slam2d/io/detail/message_definitions.hpp"
 
 #include <map>
 #include <set>
@@ -21,7 +21,7 @@ const std::map<std::string_view, Definition>& definitions() {
       {"std_msgs/Header", {"builtin_interfaces/Time stamp\nstring frame_id\n", {"builtin_interfaces/Time"}}},
       {"geometry_msgs/Point", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
       {"geometry_msgs/Vector3", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
-      {"geometry_msgs/Quaternion", {"float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n", {}}},
+      {"geometry_msgs/Quaternion", {"float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n", {}}},
       {"geometry_msgs/Pose",
        {"geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n",
         {"geometry_msgs/Point", "geometry_msgs/Quaternion"}}},
@@ -68,36 +68,39 @@ const std::map<std::string_view, Definition>& definitions() {
   return known;
 }
 
-const Definition& definition(std::string_view type) {
+const Definition& definition(std::string_view type, RosVersion version) {
+  static const Definition kRos1Header = {"uint32 seq\ntime stamp\nstring frame_id\n", {}};
+  if (version == RosVersion::kRos1 && type == "std_msgs/Header") return kRos1Header;
   const auto found = definitions().find(type);
   if (found == definitions().end()) throw Error("no ROS 2 definition of " + std::string(type) + " in slam2d");
   return found->second;
 }
 
 // The types `type` uses, directly or not, each once, in the order first met.
-void collect_uses(std::string_view type, std::vector<std::string_view>& order, std::set<std::string_view>& seen) {
-  for (std::string_view used : definition(type).uses) {
+void collect_uses(std::string_view type, RosVersion version, std::vector<std::string_view>& order,
+                  std::set<std::string_view>& seen) {
+  for (std::string_view used : definition(type, version).uses) {
     if (!seen.insert(used).second) continue;
     order.push_back(used);
-    collect_uses(used, order, seen);
+    collect_uses(used, version, order, seen);
   }
 }
 
 }  // namespace
 
-std::string ros2msg_schema(std::string_view type) {
+std::string message_definition(std::string_view type, RosVersion version) {
   // "sensor_msgs/msg/LaserScan" -> "sensor_msgs/LaserScan", the form the definitions use.
   std::string name(type);
   if (const std::size_t at = name.find("/msg/"); at != std::string::npos) name.erase(at, 4);
-  std::string schema(definition(name).fields);
+  std::string text(definition(name, version).fields);
   std::vector<std::string_view> order;
   std::set<std::string_view> seen;
-  collect_uses(name, order, seen);
+  collect_uses(name, version, order, seen);
   for (std::string_view used : order) {
-    schema += "================================================================================\nMSG: ";
-    schema.append(used).append("\n").append(definition(used).fields);
+    text += "================================================================================\nMSG: ";
+    text.append(used).append("\n").append(definition(used, version).fields);
   }
-  return schema;
+  return text;
 }
 
 }  // namespace slam2d::detail
