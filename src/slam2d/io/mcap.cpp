@@ -1,9 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/mcap.hpp"
 
-#include <lz4frame.h>
 #include <zlib.h>
-#include <zstd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -17,26 +15,27 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/detail/cdr.hpp"
+#include "slam2d/io/detail/compression.hpp"
+#include "slam2d/io/detail/mcap_records.hpp"
 
 namespace slam2d {
 namespace {
 
-constexpr unsigned char kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+using mcap::kMagic;
 constexpr std::uint64_t kRecordPrefix = 9;  // opcode (1) + content length (8)
 constexpr std::uint64_t kFooterRecord = kRecordPrefix + 20;
 constexpr std::uint64_t kMaxUncompressed = std::uint64_t{1} << 30;  // 1 GiB
 constexpr std::uint64_t kMaxRatio = 1000;                           // uncompressed / compressed
 
-enum Opcode : std::uint8_t {
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kDataEnd = 0x0F,
-};
+// The opcodes the reader handles, as the bytes it compares.
+constexpr std::uint8_t kFooter = static_cast<std::uint8_t>(mcap::Opcode::kFooter);
+constexpr std::uint8_t kSchema = static_cast<std::uint8_t>(mcap::Opcode::kSchema);
+constexpr std::uint8_t kChannel = static_cast<std::uint8_t>(mcap::Opcode::kChannel);
+constexpr std::uint8_t kMessage = static_cast<std::uint8_t>(mcap::Opcode::kMessage);
+constexpr std::uint8_t kChunk = static_cast<std::uint8_t>(mcap::Opcode::kChunk);
+constexpr std::uint8_t kMessageIndex = static_cast<std::uint8_t>(mcap::Opcode::kMessageIndex);
+constexpr std::uint8_t kChunkIndex = static_cast<std::uint8_t>(mcap::Opcode::kChunkIndex);
+constexpr std::uint8_t kDataEnd = static_cast<std::uint8_t>(mcap::Opcode::kDataEnd);
 
 /// A malformed file; what() is the reason, the source adds the path.
 class Malformed : public Error {
@@ -112,34 +111,6 @@ RecordView record_in(const std::vector<std::uint8_t>& bytes, std::uint64_t offse
   return view;
 }
 
-std::vector<std::uint8_t> decompress_lz4(const std::uint8_t* data, std::size_t size, std::size_t uncompressed) {
-  std::vector<std::uint8_t> out(uncompressed);
-  LZ4F_dctx* context = nullptr;
-  if (LZ4F_isError(LZ4F_createDecompressionContext(&context, LZ4F_VERSION))) throw Malformed("cannot create an lz4 context");
-  std::size_t in_pos = 0;
-  std::size_t out_pos = 0;
-  std::size_t hint = 1;
-  while (hint != 0 && in_pos < size) {
-    std::size_t in_size = size - in_pos;
-    std::size_t out_size = uncompressed - out_pos;
-    hint = LZ4F_decompress(context, out.data() + out_pos, &out_size, data + in_pos, &in_size, nullptr);
-    if (LZ4F_isError(hint)) {
-      const std::string reason = LZ4F_getErrorName(hint);
-      LZ4F_freeDecompressionContext(context);
-      throw Malformed("lz4: " + reason);
-    }
-    in_pos += in_size;
-    out_pos += out_size;
-    if (in_size == 0 && out_size == 0) break;  // no progress: the output is full
-  }
-  LZ4F_freeDecompressionContext(context);
-  if (hint != 0 || out_pos != uncompressed) {
-    throw Malformed("lz4 frame gives " + std::to_string(out_pos) + " bytes" + (hint != 0 ? " and is incomplete" : "") +
-                    ", the chunk says " + std::to_string(uncompressed));
-  }
-  return out;
-}
-
 void check_compression(const std::string& compression) {
   if (!compression.empty() && compression != "zstd" && compression != "lz4") {
     throw Malformed("unknown compression '" + compression + "' (slam2d reads '', 'zstd', 'lz4')");
@@ -159,14 +130,12 @@ std::vector<std::uint8_t> decompress(const std::string& compression, const std::
     throw Malformed("implausible uncompressed size " + std::to_string(uncompressed) + " for " + std::to_string(size) +
                     " compressed bytes");
   }
-  if (compression == "lz4") return decompress_lz4(data, size, uncompressed);
-  std::vector<std::uint8_t> out(uncompressed);
-  const std::size_t got = ZSTD_decompress(out.data(), out.size(), data, size);
-  if (ZSTD_isError(got)) throw Malformed(std::string("zstd: ") + ZSTD_getErrorName(got));
-  if (got != uncompressed) {
-    throw Malformed("zstd gives " + std::to_string(got) + " bytes, the chunk says " + std::to_string(uncompressed));
+  try {
+    return detail::decompress(compression == "lz4" ? detail::Codec::kLz4Frame : detail::Codec::kZstd, {data, size},
+                              uncompressed);
+  } catch (const Error& e) {
+    throw Malformed(e.what());
   }
-  return out;
 }
 
 class McapSource final : public BagSource {
@@ -274,9 +243,9 @@ class McapSource final : public BagSource {
     file_.seekg(0, std::ios::end);
     size_ = static_cast<std::uint64_t>(file_.tellg());
     unsigned char magic[8] = {};
-    if (size_ < sizeof magic) throw Malformed("not an MCAP file (too short for the magic)");
-    read_exact(0, magic, sizeof magic);
-    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw Malformed("not an MCAP file (bad magic)");
+    if (size_ < kMagic.size()) throw Malformed("not an MCAP file (too short for the magic)");
+    read_exact(0, magic, kMagic.size());
+    if (std::memcmp(magic, kMagic.data(), kMagic.size()) != 0) throw Malformed("not an MCAP file (bad magic)");
 
     if (!read_summary()) scan_data_section();
     std::stable_sort(messages_.begin(), messages_.end(),
@@ -286,16 +255,16 @@ class McapSource final : public BagSource {
 
   /// Reads the summary through the footer; false when the file has none (or no chunk indexes).
   bool read_summary() {
-    if (size_ < 2 * sizeof kMagic + kFooterRecord) return false;
+    if (size_ < 2 * kMagic.size() + kFooterRecord) return false;
     unsigned char magic[8];
-    read_exact(size_ - sizeof magic, magic, sizeof magic);
-    if (std::memcmp(magic, kMagic, sizeof magic) != 0) return false;  // truncated: the linear pass reports it
-    const std::uint64_t footer_offset = size_ - sizeof magic - kFooterRecord;
+    read_exact(size_ - kMagic.size(), magic, kMagic.size());
+    if (std::memcmp(magic, kMagic.data(), kMagic.size()) != 0) return false;  // truncated: the linear pass reports it
+    const std::uint64_t footer_offset = size_ - kMagic.size() - kFooterRecord;
     const std::vector<std::uint8_t> footer = read_record(footer_offset, kFooter, "footer");
     Fields fields(footer.data(), footer.size());
     const std::uint64_t summary_start = fields.u64();
     if (summary_start == 0) return false;
-    if (summary_start < sizeof magic || summary_start > footer_offset) {
+    if (summary_start < kMagic.size() || summary_start > footer_offset) {
       throw Malformed(at("footer", footer_offset) + ": summary start " + std::to_string(summary_start) + " is outside the file");
     }
     struct ChunkIndex {
@@ -375,7 +344,7 @@ class McapSource final : public BagSource {
 
   /// One pass over the data section, for a file without a summary or chunk indexes.
   void scan_data_section() {
-    for (std::uint64_t offset = sizeof kMagic;;) {
+    for (std::uint64_t offset = kMagic.size();;) {
       const auto [opcode, length] = record_prefix(offset);
       if (opcode == kDataEnd || opcode == kFooter) return;
       if (opcode == kSchema || opcode == kChannel) {
@@ -562,8 +531,8 @@ class McapSource final : public BagSource {
 
 bool is_mcap(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
-  char magic[sizeof kMagic] = {};
-  return file.read(magic, sizeof magic) && std::memcmp(magic, kMagic, sizeof magic) == 0;
+  char magic[kMagic.size()] = {};
+  return file.read(magic, kMagic.size()) && std::memcmp(magic, kMagic.data(), kMagic.size()) == 0;
 }
 
 std::unique_ptr<BagSource> open_mcap(const std::string& path) { return std::make_unique<McapSource>(path); }

@@ -62,7 +62,7 @@ std::vector<std::uint8_t> lz4_decompress(std::span<const std::uint8_t> data, std
   std::size_t in_pos = 0;
   std::size_t out_pos = 0;
   std::size_t hint = 1;
-  while (hint != 0 && in_pos < data.size()) {
+  while (in_pos < data.size()) {  // one frame, or several one after the other
     std::size_t in_size = data.size() - in_pos;
     std::size_t out_size = size - out_pos;
     hint = LZ4F_decompress(context.get(), out.data() + out_pos, &out_size, data.data() + in_pos, &in_size, nullptr);
@@ -71,10 +71,9 @@ std::vector<std::uint8_t> lz4_decompress(std::span<const std::uint8_t> data, std
     out_pos += out_size;
     if (in_size == 0 && out_size == 0) break;  // no progress: the output is full
   }
-  if (hint != 0 || out_pos != size) {
-    throw Error("lz4: the frame gives " + std::to_string(out_pos) + " bytes" + (hint != 0 ? " and is incomplete" : "") +
-                ", not " + std::to_string(size));
-  }
+  if (in_pos < data.size()) throw Error("lz4: the data gives more than " + std::to_string(size) + " bytes");
+  if (hint != 0) throw Error("lz4: the data ends inside its frame (truncated)");
+  if (out_pos != size) throw Error("lz4: the data gives " + std::to_string(out_pos) + " bytes, not " + std::to_string(size));
   return out;
 }
 

@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/detail/ros1_records.hpp"
 
-#include <bzlib.h>
-#include <lz4frame.h>
-
 #include <memory>
+
+#include "slam2d/io/detail/compression.hpp"
 
 namespace slam2d::ros1 {
 
@@ -80,53 +79,8 @@ RecordLayout record_layout(std::uint64_t pos, std::uint64_t size, std::uint32_t 
   return layout;
 }
 
-namespace {
-
-std::vector<std::uint8_t> decompress_bz2(Bytes data, std::uint64_t size) {
-  std::vector<std::uint8_t> out(size);
-  unsigned int out_size = static_cast<unsigned int>(size);
-  // bzlib's API takes a non-const source it does not write to.
-  char* source = const_cast<char*>(reinterpret_cast<const char*>(data.data()));
-  const int status = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size, source,
-                                                static_cast<unsigned int>(data.size()), 0, 0);
-  if (status == BZ_OUTBUFF_FULL) throw Error("bz2 chunk larger than its header's size " + std::to_string(size));
-  if (status != BZ_OK) throw Error("corrupt bz2 chunk (bzlib error " + std::to_string(status) + ")");
-  if (out_size != size) {
-    throw Error("bz2 chunk holds " + std::to_string(out_size) + " bytes, its header says " + std::to_string(size));
-  }
-  return out;
-}
-
-// roslz4 writes one LZ4 frame per chunk; concatenated frames are accepted too.
-std::vector<std::uint8_t> decompress_lz4(Bytes data, std::uint64_t size) {
-  LZ4F_dctx* raw = nullptr;
-  if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) throw Error("cannot create an lz4 context");
-  const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(raw, LZ4F_freeDecompressionContext);
-  std::vector<std::uint8_t> out(size);
-  std::size_t in_pos = 0;
-  std::size_t out_pos = 0;
-  std::size_t hint = 1;
-  while (in_pos < data.size()) {
-    std::size_t in_size = data.size() - in_pos;
-    std::size_t out_size = out.size() - out_pos;
-    hint = LZ4F_decompress(context.get(), out.data() + out_pos, &out_size, data.data() + in_pos, &in_size, nullptr);
-    if (LZ4F_isError(hint)) throw Error(std::string("corrupt lz4 chunk (") + LZ4F_getErrorName(hint) + ")");
-    in_pos += in_size;
-    out_pos += out_size;
-    if (in_size == 0 && out_size == 0) break;  // output full, input left: larger than its header says
-  }
-  if (in_pos < data.size()) throw Error("lz4 chunk larger than its header's size " + std::to_string(size));
-  if (hint != 0) throw Error("lz4 chunk ends inside its frame (truncated)");
-  if (out_pos != size) {
-    throw Error("lz4 chunk holds " + std::to_string(out_pos) + " bytes, its header says " + std::to_string(size));
-  }
-  return out;
-}
-
-}  // namespace
-
 std::vector<std::uint8_t> decompress_chunk(std::string_view compression, Bytes data, std::uint64_t size) {
-  if (compression == "none") {
+  if (compression == "none") {  // copied, so that every chunk is owned the same way
     if (data.size() != size) {
       throw Error("uncompressed chunk of " + std::to_string(data.size()) + " bytes, its header says " +
                   std::to_string(size));
@@ -140,7 +94,11 @@ std::vector<std::uint8_t> decompress_chunk(std::string_view compression, Bytes d
     throw Error("implausible uncompressed chunk size " + std::to_string(size) + " for " + std::to_string(data.size()) +
                 " compressed bytes");
   }
-  return compression == "bz2" ? decompress_bz2(data, size) : decompress_lz4(data, size);
+  try {
+    return detail::decompress(compression == "bz2" ? detail::Codec::kBz2 : detail::Codec::kLz4Frame, data, size);
+  } catch (const Error& e) {
+    throw Error(std::string("corrupt chunk: ") + e.what());
+  }
 }
 
 }  // namespace slam2d::ros1
