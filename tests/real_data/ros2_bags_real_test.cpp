@@ -183,6 +183,13 @@ std::size_t first_record(const std::vector<char>& bytes, unsigned char opcode) {
   return 0;
 }
 
+/// `bytes` with the DataEnd record's data section CRC zeroed ("not checked"), so that a change
+/// inside the data section reaches the check that names it more precisely.
+std::vector<char> without_data_crc(std::vector<char> bytes) {
+  std::memset(bytes.data() + first_record(bytes, 0x0F) + 9, 0, 4);
+  return bytes;
+}
+
 /// Reading the whole file fails with an Error whose message starts with the path and has `needle`.
 void expect_bad(const fs::path& file, const std::string& needle) {
   try {
@@ -212,25 +219,32 @@ TEST(Ros2BagsReal, CorruptedMcapCopiesAreErrorsNamingTheFile) {
   spit(tmp.path() / "truncated_stream.mcap", bytes);
   expect_bad(tmp.path() / "truncated_stream.mcap", "runs past the end of the file");
 
-  bytes = lz4;  // the chunk's compression string "lz4" (3 bytes) after 3 u64 and the CRC
+  bytes = without_data_crc(lz4);  // the chunk's compression string "lz4" (3 bytes) after 3 u64 and the CRC
   const std::size_t compression = chunk + 9 + 24 + 4;
   ASSERT_EQ(std::string(bytes.data() + compression + 4, 3), "lz4");
   std::memcpy(bytes.data() + compression, "\x02\x00\x00\x00xz", 6);  // "xz", the next byte now in the records' length
   spit(tmp.path() / "xz.mcap", bytes);
   expect_bad(tmp.path() / "xz.mcap", at_chunk + "unknown compression 'xz'");
 
-  bytes = lz4;
+  bytes = without_data_crc(lz4);
   bytes[chunk + 9 + 24] ^= 0x5a;
   spit(tmp.path() / "crc.mcap", bytes);
   expect_bad(tmp.path() / "crc.mcap", at_chunk + "CRC mismatch");
 
-  bytes = lz4;
+  for (const std::vector<char>* file : {&lz4, &streamed}) {  // a byte of the header's library name, in no chunk
+    bytes = *file;
+    bytes[8 + 9 + 4 + 4 + 4] ^= 0x20;
+    spit(tmp.path() / "data_crc.mcap", bytes);
+    expect_bad(tmp.path() / "data_crc.mcap", "data section CRC mismatch");
+  }
+
+  bytes = without_data_crc(lz4);
   const std::uint64_t huge_size = std::uint64_t{1} << 40;
   std::memcpy(bytes.data() + chunk + 9 + 16, &huge_size, 8);
   spit(tmp.path() / "size.mcap", bytes);
   expect_bad(tmp.path() / "size.mcap", "implausible uncompressed size");
 
-  bytes = lz4;
+  bytes = without_data_crc(lz4);
   const std::uint64_t past_end = lz4.size();
   std::memcpy(bytes.data() + chunk + 1, &past_end, 8);
   spit(tmp.path() / "length.mcap", bytes);
@@ -241,7 +255,7 @@ TEST(Ros2BagsReal, CorruptedMcapCopiesAreErrorsNamingTheFile) {
   spit(tmp.path() / "message.mcap", bytes);
   expect_bad(tmp.path() / "message.mcap", "runs past the end of the file");
 
-  bytes = streamed;  // a scan's ranges count larger than its message
+  bytes = without_data_crc(streamed);  // a scan's ranges count larger than its message
   const std::size_t message = first_record(streamed, 0x05);
   std::size_t scan = message;
   for (std::uint64_t length = 0; scan < streamed.size(); scan += 9 + length) {
@@ -254,7 +268,7 @@ TEST(Ros2BagsReal, CorruptedMcapCopiesAreErrorsNamingTheFile) {
   spit(tmp.path() / "ranges.mcap", bytes);
   expect_bad(tmp.path() / "ranges.mcap", "on /scan: truncated CDR message: a sequence of 100000 ranges");
 
-  bytes = lz4;
+  bytes = without_data_crc(lz4);
   bytes[1] = 'X';
   spit(tmp.path() / "magic.mcap", bytes);
   expect_bad(tmp.path() / "magic.mcap", "not an MCAP file");

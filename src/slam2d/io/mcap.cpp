@@ -267,6 +267,11 @@ class McapSource final : public BagSource {
     if (summary_start < kMagic.size() || summary_start > footer_offset) {
       throw Malformed(at("footer", footer_offset) + ": summary start " + std::to_string(summary_start) + " is outside the file");
     }
+    // The DataEnd record ends the data section, just before the summary.
+    constexpr std::uint64_t kDataEndRecord = kRecordPrefix + 4;
+    if (summary_start >= kMagic.size() + kDataEndRecord && record_prefix(summary_start - kDataEndRecord).first == kDataEnd) {
+      check_data_section_crc(summary_start - kDataEndRecord);
+    }
     struct ChunkIndex {
       ChunkRef chunk;
       std::vector<std::uint64_t> message_indexes;  // file offsets of its MessageIndex records
@@ -342,10 +347,33 @@ class McapSource final : public BagSource {
     }
   }
 
+  /// The DataEnd record at `offset`: a non-zero data_section_crc must be the CRC-32 of every byte
+  /// before the record, the leading magic included, as the mcap libraries write it (one more read of
+  /// the data section, in blocks).
+  void check_data_section_crc(std::uint64_t offset) {
+    const std::vector<std::uint8_t> content = read_record(offset, kDataEnd, "data end");
+    Fields fields(content.data(), content.size());
+    const std::uint32_t expected = fields.u32();
+    if (expected == 0) return;
+    std::vector<std::uint8_t> block(std::uint64_t{1} << 20);
+    uLong actual = crc32(0L, Z_NULL, 0);
+    for (std::uint64_t at = 0; at < offset;) {
+      const std::uint64_t n = std::min<std::uint64_t>(block.size(), offset - at);
+      read_exact(at, block.data(), n);
+      actual = crc32(actual, block.data(), static_cast<uInt>(n));
+      at += n;
+    }
+    if (actual != expected) {
+      throw Malformed(at("data end", offset) + ": data section CRC mismatch (the file says " + std::to_string(expected) +
+                      ", its bytes give " + std::to_string(actual) + ")");
+    }
+  }
+
   /// One pass over the data section, for a file without a summary or chunk indexes.
   void scan_data_section() {
     for (std::uint64_t offset = kMagic.size();;) {
       const auto [opcode, length] = record_prefix(offset);
+      if (opcode == kDataEnd) check_data_section_crc(offset);
       if (opcode == kDataEnd || opcode == kFooter) return;
       if (opcode == kSchema || opcode == kChannel) {
         std::vector<std::uint8_t> content(length);

@@ -6,7 +6,7 @@
 // has one, and the message indexes to list each chunk's messages without decompressing it; a file
 // without a summary (or without chunk indexes: messages straight in the data section) is read in
 // one linear pass instead. Chunks may be uncompressed, "zstd" or "lz4" (an LZ4 frame); a non-zero
-// chunk CRC is checked. Messages come out in log_time order (ties in file order), one chunk
+// chunk CRC is checked, and a non-zero data section CRC (DataEnd) on every open. Messages come out in log_time order (ties in file order), one chunk
 // decompressed at a time.
 
 #include <memory>

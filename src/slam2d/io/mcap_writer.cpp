@@ -151,8 +151,8 @@ struct McapWriter::Impl {
 McapWriter::McapWriter(const std::string& path, McapWriterOptions options)
     : impl_(std::make_unique<Impl>(path, std::move(options))) {
   check(impl_->options.chunk_bytes > 0, path + ": MCAP chunk size must be positive");
+  impl_->in_data_section = true;  // the data section's CRC covers the leading magic too (as the mcap libraries write it)
   impl_->emit(mcap::kMagic);
-  impl_->in_data_section = true;  // the data section's CRC starts after the magic
   Content header;
   header.string(impl_->options.profile).string("slam2d");
   impl_->emit(record(Opcode::kHeader, header));
