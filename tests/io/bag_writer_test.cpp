@@ -242,6 +242,46 @@ TEST(Rosbag2Writer, AFolderOfMcapAndMetadataReadsBack) {
   expect_bag_holds(*source, wrote);
 }
 
+// rosbag2 splits a long recording into several storage files: they read as one bag, in time order,
+// whether the files follow each other or overlap in time.
+TEST(Rosbag2Reader, ASplitBagReadsAsOne) {
+  const TempDir dir;
+  const auto wrote = messages(100);
+  const auto write_split = [&](const std::string& name, auto file_of) {
+    const std::filesystem::path folder = dir.path() / name;
+    std::filesystem::create_directories(folder);
+    std::unique_ptr<BagSink> files[2] = {open_mcap_writer((folder / "b_0.mcap").string(), {.chunk_bytes = 8 * 1024}),
+                                         open_mcap_writer((folder / "b_1.mcap").string(), {.chunk_bytes = 8 * 1024})};
+    for (std::size_t i = 0; i < wrote.size(); ++i) {
+      files[file_of(i)]->write(wrote[i].first, receive_time_of(wrote[i].second), wrote[i].second);
+    }
+    for (auto& file : files) file->commit();
+    std::ofstream(folder / "metadata.yaml") << "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+                                               "  relative_file_paths:\n    - b_0.mcap\n    - b_1.mcap\n";
+    return folder.string();
+  };
+  std::unique_ptr<BagSource> consecutive = open_rosbag2(write_split("consecutive", [&](std::size_t i) { return i < wrote.size() / 2 ? 0 : 1; }));
+  expect_bag_holds(*consecutive, wrote);
+
+  std::unique_ptr<BagSource> overlapping = open_rosbag2(write_split("overlapping", [](std::size_t i) { return i % 2; }));
+  std::size_t count = 0;
+  double last = -1.0;
+  while (auto record = overlapping->next(kAllTopics)) {
+    EXPECT_GE(record->receive_time, last) << count;
+    last = record->receive_time;
+    ++count;
+  }
+  EXPECT_EQ(count, wrote.size());
+
+  std::filesystem::remove(dir.path() / "overlapping" / "b_1.mcap");
+  try {
+    open_rosbag2((dir.path() / "overlapping").string());
+    ADD_FAILURE() << "a missing storage file was not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("b_1.mcap"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Rosbag2Writer, RefusesToOverwriteAFolderThatIsNotABag) {
   const TempDir dir;
   std::filesystem::create_directories(dir.path() / "precious");

@@ -148,6 +148,62 @@ class SqliteSource final : public BagSource {
   std::size_t read_ = 0;
 };
 
+/// A bag split into several storage files (rosbag2 splits by size or duration): one bag, its
+/// topics merged, its messages in receive-time order across the files (ties: the earlier file).
+class SplitSource final : public BagSource {
+ public:
+  SplitSource(std::string path, std::vector<std::unique_ptr<BagSource>> files)
+      : path_(std::move(path)), files_(std::move(files)), ahead_(files_.size()) {
+    std::size_t before = 0;
+    for (const auto& file : files_) {
+      first_index_.push_back(before);
+      for (const BagTopic& topic : file->topics()) {
+        before += topic.count;
+        auto same = std::find_if(topics_.begin(), topics_.end(), [&](const BagTopic& t) { return t.name == topic.name; });
+        if (same == topics_.end()) {
+          topics_.push_back(topic);
+          continue;
+        }
+        check(same->type == topic.type, path_ + ": topic " + topic.name + " is " + same->type + " in one storage file and " +
+                                            topic.type + " in " + file->path());
+        if (topic.count == 0) continue;
+        same->first_stamp = same->count == 0 ? topic.first_stamp : std::min(same->first_stamp, topic.first_stamp);
+        same->last_stamp = same->count == 0 ? topic.last_stamp : std::max(same->last_stamp, topic.last_stamp);
+        same->count += topic.count;
+      }
+    }
+  }
+
+  const std::string& path() const override { return path_; }
+  const std::vector<BagTopic>& topics() const override { return topics_; }
+  double progress() const override {
+    double sum = 0.0;
+    for (const auto& file : files_) sum += file->progress();
+    return sum / static_cast<double>(files_.size());
+  }
+
+  std::optional<DecodedRecord> next(const std::vector<std::string>& wanted) override {
+    std::optional<std::size_t> earliest;
+    for (std::size_t i = 0; i < files_.size(); ++i) {
+      if (ahead_[i] && std::find(wanted.begin(), wanted.end(), ahead_[i]->topic) == wanted.end()) ahead_[i].reset();
+      if (!ahead_[i]) ahead_[i] = files_[i]->next(wanted);
+      if (ahead_[i] && (!earliest || ahead_[i]->receive_time < ahead_[*earliest]->receive_time)) earliest = i;
+    }
+    if (!earliest) return std::nullopt;
+    DecodedRecord record = std::move(*ahead_[*earliest]);
+    ahead_[*earliest].reset();
+    record.index += first_index_[*earliest];
+    return record;
+  }
+
+ private:
+  std::string path_;
+  std::vector<std::unique_ptr<BagSource>> files_;
+  std::vector<std::optional<DecodedRecord>> ahead_;  // each file's next wanted message
+  std::vector<std::size_t> first_index_;             // messages in the files before each
+  std::vector<BagTopic> topics_;
+};
+
 fs::path metadata_path(const std::string& path) {
   const fs::path p(path);
   std::error_code error;
@@ -170,17 +226,22 @@ std::unique_ptr<BagSource> open_rosbag2(const std::string& path) {
   if (!fs::is_regular_file(metadata, error)) throw Error(name + ": cannot open: no such file (not a rosbag2 folder?)");
   const ConfigNode info = ConfigNode::load(name).at("rosbag2_bagfile_information");
   const std::string storage = info.at("storage_identifier").as_string();
-  std::vector<std::string> files;
-  for (const ConfigNode& item : info.at("relative_file_paths").items()) files.push_back(item.as_string());
-  if (files.size() != 1) {
-    throw Error(name + ": " + std::to_string(files.size()) +
-                " storage files in relative_file_paths; slam2d reads a bag of exactly one (split bags are not supported)");
+  if (storage != "mcap" && storage != "sqlite3") {
+    throw Error(name + ": unknown storage_identifier '" + storage + "' (slam2d reads mcap and sqlite3)");
   }
-  const fs::path file = metadata.parent_path() / files.front();
-  if (!fs::is_regular_file(file, error)) throw Error(name + ": storage file " + file.string() + " does not exist");
-  if (storage == "mcap") return open_mcap(file.string());
-  if (storage == "sqlite3") return open_rosbag2_sqlite(file.string());
-  throw Error(name + ": unknown storage_identifier '" + storage + "' (slam2d reads mcap and sqlite3)");
+  if (info.has("compression_mode") && !info.at("compression_mode").as_string().empty()) {
+    throw Error(name + ": compression_mode " + info.at("compression_mode").as_string() +
+                ": slam2d reads uncompressed rosbag2 storage (`ros2 bag convert` or `ros2 bag decompress` undoes it)");
+  }
+  std::vector<std::unique_ptr<BagSource>> files;
+  for (const ConfigNode& item : info.at("relative_file_paths").items()) {
+    const fs::path file = metadata.parent_path() / item.as_string();
+    if (!fs::is_regular_file(file, error)) throw Error(name + ": storage file " + file.string() + " does not exist");
+    files.push_back(storage == "mcap" ? open_mcap(file.string()) : open_rosbag2_sqlite(file.string()));
+  }
+  if (files.empty()) throw Error(name + ": no storage files in relative_file_paths");
+  if (files.size() == 1) return std::move(files.front());
+  return std::make_unique<SplitSource>(name, std::move(files));
 }
 
 std::unique_ptr<BagSource> open_rosbag2_sqlite(const std::string& db3_path) {

@@ -15,10 +15,12 @@ namespace slam2d {
 bool is_rosbag2(const std::string& path);
 
 /// Opens a rosbag2 folder (or its metadata.yaml): storage_identifier and relative_file_paths
-/// from metadata.yaml, then open_mcap on the .mcap or an SQLite reader on the .db3 (messages
-/// ORDER BY timestamp, id; DecodedRecord::index is the messages row id). Throws Error("PATH: ...")
-/// for a missing or malformed metadata.yaml, an unknown storage identifier, a storage file that
-/// does not exist, a split bag (more than one storage file) and a .db3 without those tables.
+/// from metadata.yaml, then open_mcap on each .mcap or an SQLite reader on each .db3 (messages
+/// ORDER BY timestamp, id; DecodedRecord::index is the messages row id). A bag split into several
+/// storage files reads as one: topics merged, messages in receive-time order across the files.
+/// Throws Error("PATH: ...") for a missing or malformed metadata.yaml, an unknown storage
+/// identifier, compressed storage (compression_mode FILE or MESSAGE), a storage file that does not
+/// exist, a topic whose type differs between files and a .db3 without those tables.
 std::unique_ptr<BagSource> open_rosbag2(const std::string& path);
 
 /// The SQLite reader alone, on a .db3 file.
