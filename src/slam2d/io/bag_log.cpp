@@ -107,6 +107,8 @@ void BagLogReader::read_more() {
   // The end: scans after the last odometry reading hold its pose.
   release_scans_up_to(std::numeric_limits<double>::infinity());
   finished_ = true;
+  const std::vector<std::string> source_warnings = source_->warnings();
+  warnings_.insert(warnings_.end(), source_warnings.begin(), source_warnings.end());
   if (choice_.base_frame.empty()) choice_.base_frame = "base_link";
   if (choice_.odom_topic.empty() || !has_odometry_) {
     warnings_.push_back(path() + ": no odometry in the bag (no Odometry topic, no odom -> base on /tf)");

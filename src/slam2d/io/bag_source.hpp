@@ -96,6 +96,8 @@ class BagSource {
   virtual std::optional<DecodedRecord> next(const std::vector<std::string>& wanted) = 0;
   /// Fraction read, in [0, 1], for the progress line.
   virtual double progress() const = 0;
+  /// What the reader worked around ("PATH: warning: ..."): a ROS 1 bag without an index, a tail cut short.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 }  // namespace slam2d

@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 #include "slam2d/io/detail/ros1_messages.hpp"
@@ -89,6 +90,7 @@ class Ros1Bag final : public BagSource {
 
   const std::string& path() const override { return path_; }
   const std::vector<BagTopic>& topics() const override { return topics_; }
+  std::vector<std::string> warnings() const override { return warnings_; }
   double progress() const override {
     return queue_.empty() ? (started_ ? 1.0 : 0.0) : static_cast<double>(next_) / static_cast<double>(queue_.size());
   }
@@ -118,11 +120,12 @@ class Ros1Bag final : public BagSource {
     const std::uint64_t index_pos = bag_header.u64("index_pos");
     const std::uint32_t connection_count = bag_header.u32("conn_count");
     const std::uint32_t chunk_count = bag_header.u32("chunk_count");
-    if (index_pos == 0) {
-      throw Error("no index: the bag was not closed properly (reindex it with rosbag reindex)");
+    if (index_pos == 0 || index_pos < header_layout.end() || index_pos >= file_.size()) {
+      // A recording that was killed: no index (or one cut off). Read it as `rosbag reindex` would.
+      warnings_.push_back(path_ + ": warning: no index (a recording that was not closed): read in one pass over its chunks");
+      scan_chunks(header_layout.end());
+      return;
     }
-    check(index_pos >= header_layout.end() && index_pos < file_.size(),
-          "index position " + std::to_string(index_pos) + " outside the file (truncated? rosbag reindex repairs it)");
 
     std::vector<std::uint64_t> chunk_positions;
     for (std::uint64_t pos = index_pos; pos < file_.size();) {
@@ -147,9 +150,13 @@ class Ros1Bag final : public BagSource {
   }
 
   void read_connection(const HeaderFields& fields, const RecordLayout& layout) {
+    add_connection(fields, file_.read(layout.data_pos, layout.data_len));
+  }
+
+  // A connection record: its header's conn and topic, and its data, the connection header.
+  void add_connection(const HeaderFields& fields, Bytes data) {
     const std::uint32_t id = fields.u32("conn");
     check(!connection_index_.contains(id), "connection " + std::to_string(id) + " defined twice");
-    const std::vector<std::uint8_t> data = file_.read(layout.data_pos, layout.data_len);
     const HeaderFields connection_header(data);
     Connection& connection = connections_.emplace_back();
     connection.id = id;
@@ -157,6 +164,64 @@ class Ros1Bag final : public BagSource {
     connection.type = connection_header.text("type");
     if (connection_header.find("md5sum")) connection.md5sum = connection_header.text("md5sum");
     connection_index_[id] = static_cast<std::uint32_t>(connections_.size() - 1);
+  }
+
+  // A bag without an index: every chunk from `pos` on, decompressed, its connection and message
+  // data records listed in file order. A tail cut short (the last chunk of a killed recording)
+  // ends the pass with a warning; a corrupt complete chunk is an error.
+  void scan_chunks(std::uint64_t pos) {
+    while (pos < file_.size()) {
+      RecordLayout layout;
+      std::vector<std::uint8_t> header_bytes;
+      try {
+        std::tie(layout, header_bytes) = file_.record(pos);
+      } catch (const Error&) {
+        warnings_.push_back(path_ + ": warning: the last " + std::to_string(file_.size() - pos) +
+                            " bytes (from byte " + std::to_string(pos) + ") are a record cut short: not read");
+        break;
+      }
+      const HeaderFields fields(header_bytes);
+      if (fields.op() == Op::kChunk) {
+        const std::string where = "chunk at byte " + std::to_string(pos) + ": ";
+        try {
+          Chunk& chunk = chunks_.emplace_back();
+          chunk.pos = pos;
+          chunk.compression = fields.text("compression");
+          chunk.size = fields.u32("size");
+          chunk.layout = layout;
+          list_chunk_records(static_cast<std::uint32_t>(chunks_.size() - 1),
+                             ros1::decompress_chunk(chunk.compression, file_.read(layout.data_pos, layout.data_len), chunk.size));
+        } catch (const Error& e) {
+          throw Error(where + e.what());
+        }
+      } else if (fields.op() == Op::kConnection && !connection_index_.contains(fields.u32("conn"))) {
+        read_connection(fields, layout);
+      }
+      pos = layout.end();
+    }
+  }
+
+  void list_chunk_records(std::uint32_t chunk, const std::vector<std::uint8_t>& records) {
+    for (std::uint64_t pos = 0; pos < records.size();) {
+      WireReader lengths(Bytes(records).subspan(pos));
+      const std::uint32_t header_len = lengths.u32();
+      lengths.skip(header_len);
+      const RecordLayout layout = ros1::record_layout(pos, records.size(), header_len, lengths.u32());
+      const HeaderFields fields(Bytes(records).subspan(layout.header_pos, layout.header_len));
+      if (fields.op() == Op::kConnection) {
+        if (!connection_index_.contains(fields.u32("conn"))) add_connection(fields, Bytes(records).subspan(layout.data_pos, layout.data_len));
+      } else if (fields.op() == Op::kMessageData) {
+        const auto found = connection_index_.find(fields.u32("conn"));
+        check(found != connection_index_.end(), "message on unknown connection " + std::to_string(fields.u32("conn")));
+        IndexEntry& entry = entries_.emplace_back();
+        entry.time = fields.time("time");
+        entry.time_ns = entry.time.nanoseconds();
+        entry.chunk = chunk;
+        entry.offset = static_cast<std::uint32_t>(pos);
+        entry.connection = found->second;
+      }
+      pos = layout.end();
+    }
   }
 
   // A chunk record, then one index data record per connection in it.
@@ -332,6 +397,7 @@ class Ros1Bag final : public BagSource {
   std::vector<Chunk> chunks_;
   std::vector<IndexEntry> entries_;  // every message, in file order
   std::vector<BagTopic> topics_;
+  std::vector<std::string> warnings_;  // an unindexed bag, a tail cut short
 
   // The current read.
   bool started_ = false;

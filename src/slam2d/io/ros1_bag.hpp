@@ -20,8 +20,10 @@ bool is_ros1_bag(const std::string& path);
 /// sorted by stamp, since a log whose stamps step back (the Intel bag: scans up to 0.9 s out of
 /// order) would be scrambled. Each chunk is decompressed once, when first needed, and dropped after
 /// its last wanted message.
-/// Throws Error("PATH: ...") for a file that is not a v2.0 bag, has no index (a bag left unclosed:
-/// `rosbag reindex` repairs it), or whose records are inconsistent.
+/// A bag without an index (a recording that was killed: index_pos 0, or past the end of a file cut
+/// short) is read in one pass over its chunks, as `rosbag reindex` would, in the same order; a last
+/// record cut short is left out; both with a warning (BagSource::warnings).
+/// Throws Error("PATH: ...") for a file that is not a v2.0 bag or whose records are inconsistent.
 std::unique_ptr<BagSource> open_ros1_bag(const std::string& path);
 
 }  // namespace slam2d

@@ -182,6 +182,15 @@ class SplitSource final : public BagSource {
     return sum / static_cast<double>(files_.size());
   }
 
+  std::vector<std::string> warnings() const override {
+    std::vector<std::string> all;
+    for (const auto& file : files_) {
+      const std::vector<std::string> some = file->warnings();
+      all.insert(all.end(), some.begin(), some.end());
+    }
+    return all;
+  }
+
   std::optional<DecodedRecord> next(const std::vector<std::string>& wanted) override {
     std::optional<std::size_t> earliest;
     for (std::size_t i = 0; i < files_.size(); ++i) {
