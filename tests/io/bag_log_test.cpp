@@ -194,7 +194,7 @@ TEST(BagLog, ImuReadingsPassThrough) {
   topics.push_back({"/imu", "sensor_msgs/msg/Imu", 0, 0.0, 0.0});
   BagLogReader reader(std::make_unique<FakeSource>(
       topics, std::vector<DecodedRecord>{odometry(0.0, SE2()),
-                                         {"/imu", 0.5, 0, DecodedImu{0.5, "imu_link", 0.01, -0.02, 0.3}}}));
+                                         {"/imu", 0.5, 0, DecodedImu{"imu_link", {0.5, 0.01, -0.02, 0.3}}}}));
   const std::vector<SensorMessage> messages = read_all(reader);
   ASSERT_EQ(messages.size(), 2u);
   const ImuReading& imu = std::get<ImuMessage>(messages[1]).reading;

@@ -105,10 +105,10 @@ TEST(Ros1Decode, TransformsAndImuByHand) {
   imu.header(3, 500'000'000, "imu").f64(std::sin(0.05)).f64(0).f64(0).f64(std::cos(0.05)).zeros(72);
   imu.f64(0).f64(0).f64(0.25).zeros(72).zeros(24 + 72);
   const auto decoded = std::get<DecodedImu>(ros1::decode_message(ros1::MessageType::kImu, imu.bytes, false));
-  EXPECT_EQ(decoded.stamp, 3.5);
-  EXPECT_NEAR(decoded.roll, 0.1, 1e-12);
-  EXPECT_NEAR(decoded.pitch, 0.0, 1e-12);
-  EXPECT_EQ(decoded.yaw_rate, 0.25);
+  EXPECT_EQ(decoded.reading.stamp, 3.5);
+  EXPECT_NEAR(decoded.reading.roll, 0.1, 1e-12);
+  EXPECT_NEAR(decoded.reading.pitch, 0.0, 1e-12);
+  EXPECT_EQ(decoded.reading.yaw_rate, 0.25);
 }
 
 TEST(Ros1Decode, ShortLongAndOverlongMessagesAreErrors) {

@@ -143,8 +143,7 @@ void BagLogReader::take(DecodedRecord record) {
     return;
   }
   if (const auto* imu = std::get_if<DecodedImu>(&record.message)) {
-    ready_.push_back(ImuMessage{{.stamp = imu->stamp, .roll = imu->roll, .pitch = imu->pitch, .yaw_rate = imu->yaw_rate},
-                                record.index});
+    ready_.push_back(ImuMessage{imu->reading, record.index});
     return;
   }
   if (auto* odometry = std::get_if<DecodedOdometry>(&record.message)) {

@@ -12,7 +12,7 @@
 //   DecodedOdometry    nav_msgs/Odometry       (pose x, y, yaw; twist.linear.x = tv,
 //                                               twist.angular.z = rv; covariances zero)
 //   DecodedTransforms  tf2_msgs/TFMessage
-//   DecodedImu         sensor_msgs/Imu         (orientation from roll, pitch and yaw 0;
+//   DecodedImu         sensor_msgs/Imu         (orientation from the reading's roll, pitch and yaw 0;
 //                                               angular_velocity.z = yaw_rate)
 // A topic's type is fixed by its first message; a later message of another type on it is an Error.
 

@@ -19,6 +19,7 @@
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/odometry.hpp"
 #include "slam2d/core/se2.hpp"
+#include "slam2d/core/sensor_log.hpp"
 
 namespace slam2d {
 
@@ -61,13 +62,10 @@ struct DecodedTransforms {
   std::vector<DecodedTransform> transforms = {};
 };
 
-/// sensor_msgs/Imu: header.stamp, the yaw rate and the attitude's roll and pitch.
+/// sensor_msgs/Imu: header.stamp, the attitude's roll and pitch, the yaw rate (angular_velocity.z).
 struct DecodedImu {
-  double stamp = 0.0;
   std::string frame_id = {};
-  double roll = 0.0;      // rad
-  double pitch = 0.0;     // rad
-  double yaw_rate = 0.0;  // rad/s, angular_velocity.z
+  ImuReading reading = {};
 };
 
 using DecodedMessage = std::variant<DecodedScan, DecodedOdometry, DecodedTransforms, DecodedImu>;

@@ -80,8 +80,7 @@ class BagWriting {
   void operator()(const OdometryMessage& message) { odometry(message.reading); }
   void operator()(const TruePoseMessage&) { ++report.true_poses, ++report.not_written; }
   void operator()(const ImuMessage& message) {
-    const ImuReading& r = message.reading;
-    sink_.write(layout_.imu_topic, r.stamp, DecodedImu{r.stamp, layout_.base_frame, r.roll, r.pitch, r.yaw_rate});
+    sink_.write(layout_.imu_topic, message.reading.stamp, DecodedImu{layout_.base_frame, message.reading});
     ++report.imu;
   }
 

@@ -180,14 +180,14 @@ DecodedTransforms read_tf_message(CdrReader& in, bool is_static) {
 DecodedImu read_imu(CdrReader& in) {
   DecodedImu out;
   Header header = read_header(in);
-  out.stamp = header.stamp;
+  out.reading.stamp = header.stamp;
   out.frame_id = std::move(header.frame_id);
   const RosQuaternion q = read_quaternion(in);
-  out.roll = q.roll();
-  out.pitch = q.pitch();
+  out.reading.roll = q.roll();
+  out.reading.pitch = q.pitch();
   in.skip_doubles(9);  // orientation covariance
   in.skip_doubles(2);  // angular_velocity x, y
-  out.yaw_rate = in.read<double>();
+  out.reading.yaw_rate = in.read<double>();
   in.skip_doubles(9);      // angular velocity covariance
   in.skip_doubles(3 + 9);  // linear acceleration and its covariance
   return out;
@@ -222,10 +222,10 @@ void write_tf_message(CdrWriter& out, const DecodedTransforms& message) {
 }
 
 void write_imu(CdrWriter& out, const DecodedImu& message) {
-  out.header(message.stamp, message.frame_id);
-  const RosQuaternion q = RosQuaternion::from_euler(message.roll, message.pitch, 0.0);
+  out.header(message.reading.stamp, message.frame_id);
+  const RosQuaternion q = RosQuaternion::from_euler(message.reading.roll, message.reading.pitch, 0.0);
   out.put(q.x).put(q.y).put(q.z).put(q.w).zeros(9);  // orientation, covariance
-  out.zeros(2).put(message.yaw_rate).zeros(9);       // angular velocity, covariance
+  out.zeros(2).put(message.reading.yaw_rate).zeros(9);       // angular velocity, covariance
   out.zeros(3 + 9);                                  // linear acceleration, covariance
 }
 

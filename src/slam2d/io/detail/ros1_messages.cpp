@@ -124,14 +124,14 @@ DecodedTransforms read_transforms(WireReader& reader, bool is_static) {
 DecodedImu read_imu(WireReader& reader) {
   DecodedImu out;
   Header header = read_header(reader);
-  out.stamp = header.stamp;
+  out.reading.stamp = header.stamp;
   out.frame_id = std::move(header.frame_id);
   const detail::RosQuaternion q = read_quaternion(reader);
-  out.roll = q.roll();
-  out.pitch = q.pitch();
+  out.reading.roll = q.roll();
+  out.reading.pitch = q.pitch();
   reader.skip(kCovariance3Bytes);
   reader.skip(2 * 8);  // angular_velocity x y
-  out.yaw_rate = reader.f64();
+  out.reading.yaw_rate = reader.f64();
   reader.skip(kCovariance3Bytes);
   reader.skip(kVector3Bytes + kCovariance3Bytes);  // linear_acceleration
   return out;
@@ -187,11 +187,11 @@ struct Encode {
     }
   }
   void operator()(const DecodedImu& m) const {
-    write_header(out, seq, m.stamp, m.frame_id);
-    const detail::RosQuaternion q = detail::RosQuaternion::from_euler(m.roll, m.pitch, 0.0);
+    write_header(out, seq, m.reading.stamp, m.frame_id);
+    const detail::RosQuaternion q = detail::RosQuaternion::from_euler(m.reading.roll, m.reading.pitch, 0.0);
     out.f64(q.x).f64(q.y).f64(q.z).f64(q.w);
     write_zeros(out, 9 + 2);  // orientation covariance, angular_velocity x y
-    out.f64(m.yaw_rate);
+    out.f64(m.reading.yaw_rate);
     write_zeros(out, 9 + 3 + 9);  // its covariance, linear_acceleration and its covariance
   }
 };
