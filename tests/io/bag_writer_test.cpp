@@ -195,8 +195,7 @@ TEST(Ros1BagWriter, NothingIsLeftWithoutCommitOrOnABadMessage) {
 }
 
 // A real driver's bag (the lz4 ACES variant: +inf and NaN ranges), read, written back in each
-// compression and read again: the same messages in the same order. (The whole ACES bag goes
-// through the writer in LogWriter.ARealLogSurvivesABagAndBack's way in tests/cli/bag_cli_test.cpp.)
+// compression and read again: the same messages in the same order.
 TEST(Ros1BagWriter, ARealBagWrittenBackReadsTheSame) {
   const std::optional<std::filesystem::path> data = test::real_data_dir();
   if (!data) {
