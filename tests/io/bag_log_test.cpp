@@ -163,6 +163,30 @@ TEST(BagLog, GeometryOverridesReplaceWhatTheScanDeclares) {
   EXPECT_THROW(BagLogReader(std::make_unique<FakeSource>(kTopics, std::vector<DecodedRecord>{}), BagSelection{}, bad), Error);
 }
 
+// 180 beams over exactly 180 deg, as a converter writes CARMEN's 1 deg beams: a warning naming
+// --fov, not given when the geometry is overridden or the count is odd (181 beams span 180 deg).
+TEST(BagLog, AConvertersHalfTurnOverAnEvenBeamCountIsWarnedOf) {
+  const auto warnings_for = [](std::size_t beams, ScanGeometryOverrides overrides) {
+    DecodedRecord record = scan(0.0, std::vector<double>(beams, 1.0));
+    auto& decoded = std::get<DecodedScan>(record.message);
+    decoded.scan.angle_min = static_cast<float>(-std::numbers::pi / 2);
+    decoded.scan.angle_increment = static_cast<float>(std::numbers::pi / static_cast<double>(beams - 1));
+    BagLogReader reader(std::make_unique<FakeSource>(kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), record,
+                                                                                         static_transform("base_link", "laser", SE2())}),
+                        BagSelection{}, overrides);
+    read_all(reader);
+    return reader.warnings();
+  };
+  const std::vector<std::string> warned = warnings_for(180, {});
+  ASSERT_EQ(warned.size(), 1u);
+  EXPECT_NE(warned[0].find("--fov 180"), std::string::npos) << warned[0];
+  EXPECT_TRUE(warnings_for(181, {}).empty());
+  ScanGeometryOverrides fov;
+  fov.field_of_view = std::numbers::pi;
+  EXPECT_TRUE(warnings_for(360, fov).empty());
+  EXPECT_EQ(warnings_for(360, {}).size(), 1u);
+}
+
 // The Intel bag's case: 180 beams declared over exactly 180 deg; CARMEN's 180 beams of 1 deg are
 // -90 .. +89 deg, which --fov 180 gives back.
 TEST(ScanGeometry, AFieldOfViewOverEvenBeamsIsCarmensSpacing) {

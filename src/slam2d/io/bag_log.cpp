@@ -124,6 +124,7 @@ void BagLogReader::take(DecodedRecord record) {
     if (choice_.laser_frame.empty()) {
       choice_.laser_frame = scan->frame_id;
       resolve_mounting();
+      check_declared_geometry(scan->scan);
     }
     pending_scans_.push_back({std::move(*scan), record.index, odometry_seen_});
     if (!has_odometry_ && choice_.odom_topic.empty()) release_scans_up_to(std::numeric_limits<double>::infinity());
@@ -152,6 +153,20 @@ void BagLogReader::take(DecodedRecord record) {
     add_odometry(odometry->reading);
     ready_.push_back(OdometryMessage{odometry->reading, record.index});
   }
+}
+
+void BagLogReader::check_declared_geometry(const LaserScan& scan) {
+  // An even beam count spread over exactly 180 deg, first beam at -90 deg: what a converter writes
+  // for CARMEN's 180 (360) beams of 1 (0.5) deg, which span 179 (179.5) deg (the Intel bag).
+  constexpr double kPi = 3.14159265358979323846;
+  constexpr double kTolerance = 1e-5;  // rad: the declared angles are float32
+  const std::size_t n = scan.size();
+  if (geometry_.any() || n < 2 || n % 2 != 0) return;
+  if (std::abs(scan.angle_max() - scan.angle_min - kPi) > kTolerance || std::abs(scan.angle_min + kPi / 2) > kTolerance) return;
+  warnings_.push_back(path() + ": warning: the scans declare " + std::to_string(n) +
+                      " beams over exactly 180 deg; a scanner with an even beam count over a half turn steps 180/" +
+                      std::to_string(n) + " deg (CARMEN's convention): if this bag was converted from a CARMEN log, "
+                      "--fov 180 reads it so (docs/bags.md)");
 }
 
 void BagLogReader::add_odometry(const OdometryReading& reading) {

@@ -97,6 +97,7 @@ class BagLogReader {
   void add_odometry(const OdometryReading& reading);
   void add_static(const DecodedTransform& transform);
   void resolve_mounting();  // T_base_laser from the static transforms seen so far
+  void check_declared_geometry(const LaserScan& scan);  // a warning for a converter's 180 deg
 
   std::unique_ptr<BagSource> source_;
   BagChoice choice_;
