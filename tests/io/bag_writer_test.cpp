@@ -126,10 +126,12 @@ void expect_bag_holds(BagSource& source, const std::vector<std::pair<std::string
   for (const BagTopic& topic : source.topics()) counts[topic.name] = topic.count;
   EXPECT_EQ(counts["/scan"], (wrote.size() - 1) / 4);
   EXPECT_EQ(counts["/tf_static"], 1u);
+  std::size_t position = 0;
   for (const auto& [topic, message] : wrote) {
     const std::optional<DecodedRecord> read = source.next(kAllTopics);
     ASSERT_TRUE(read.has_value()) << "fewer messages than written";
     expect_read_back(*read, topic, message);
+    EXPECT_EQ(read->index, position++) << "a message's index is its position in the file";
   }
   EXPECT_FALSE(source.next(kAllTopics).has_value()) << "more messages than written";
 }

@@ -323,6 +323,7 @@ class McapSource final : public BagSource {
       for (const std::uint64_t offset : index.message_indexes) read_message_index(offset, chunk);
       std::sort(messages_.begin() + static_cast<std::ptrdiff_t>(first), messages_.end(),
                 [](const MessageRef& a, const MessageRef& b) { return a.offset < b.offset; });
+      for (std::size_t i = first; i < messages_.size(); ++i) messages_[i].order = static_cast<std::uint32_t>(i);  // file order
     }
     return true;
   }

@@ -170,17 +170,22 @@ class Ros1Bag final : public BagSource {
   // data records listed in file order. A tail cut short (the last chunk of a killed recording)
   // ends the pass with a warning; a corrupt complete chunk is an error.
   void scan_chunks(std::uint64_t pos) {
+    std::string cut;  // where the bag was cut, if it was
     while (pos < file_.size()) {
       RecordLayout layout;
       std::vector<std::uint8_t> header_bytes;
       try {
         std::tie(layout, header_bytes) = file_.record(pos);
       } catch (const Error&) {
-        warnings_.push_back(path_ + ": warning: the last " + std::to_string(file_.size() - pos) +
-                            " bytes (from byte " + std::to_string(pos) + ") are a record cut short: not read");
+        cut = "the last " + std::to_string(file_.size() - pos) + " bytes (from byte " + std::to_string(pos) +
+              ") are a record cut short";
         break;
       }
       const HeaderFields fields(header_bytes);
+      if (fields.op() == Op::kChunk && layout.data_len == 0) {  // rosbag fills the length in when it closes a chunk
+        cut = "the chunk at byte " + std::to_string(pos) + " was never closed (its data length is 0)";
+        break;
+      }
       if (fields.op() == Op::kChunk) {
         const std::string where = "chunk at byte " + std::to_string(pos) + ": ";
         try {
@@ -199,6 +204,10 @@ class Ros1Bag final : public BagSource {
       }
       pos = layout.end();
     }
+    if (cut.empty()) return;
+    check(!entries_.empty(), "no index, and " + cut + " before any message: nothing to read");
+    warnings_.push_back(path_ + ": warning: " + cut + ": the " + std::to_string(entries_.size()) +
+                        " messages before it are read");
   }
 
   void list_chunk_records(std::uint32_t chunk, const std::vector<std::uint8_t>& records) {
