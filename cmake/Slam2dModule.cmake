@@ -27,7 +27,8 @@ function(slam2d_add_module name)
   add_library(slam2d::${name} ALIAS slam2d_${name})
   # Installed and exported as slam2d::<NAME> too (src/slam2d/CMakeLists.txt), headers under
   # <prefix>/include/slam2d/<NAME>/.
-  set_target_properties(slam2d_${name} PROPERTIES EXPORT_NAME ${name})
+  # Position-independent, so that the Python module (python/) can link the static libraries.
+  set_target_properties(slam2d_${name} PROPERTIES EXPORT_NAME ${name} POSITION_INDEPENDENT_CODE ON)
   target_include_directories(slam2d_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
                                                    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(slam2d_${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})

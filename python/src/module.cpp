@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// _slam2d: the C++ library for Python (pybind11, numpy). The Pythonic layer is slam2d/__init__.py.
+// Arrays come in as float64 N x 2 (points) or N (ranges) and go out as numpy arrays; long calls
+// release the GIL.
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <string>
+
+#include "map_job.hpp"
+#include "slam2d/core/error.hpp"
+#include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/se2.hpp"
+#include "slam2d/eval/relation_error.hpp"
+#include "slam2d/io/config_file.hpp"
+#include "slam2d/io/relations.hpp"
+#include "slam2d/methods/matcher_registry.hpp"
+
+namespace py = pybind11;
+
+namespace slam2d {
+namespace {
+
+using Points = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// N x 2 float64 points as a cloud (one copy: PointCloud2 owns Eigen points).
+PointCloud2 cloud_from(const Points& points, const char* name) {
+  if (points.ndim() != 2 || points.shape(1) != 2) {
+    throw py::value_error(std::string(name) + " must be an N x 2 array of points");
+  }
+  PointCloud2 cloud;
+  const auto view = points.unchecked<2>();
+  cloud.points.resize(static_cast<std::size_t>(view.shape(0)));
+  for (py::ssize_t i = 0; i < view.shape(0); ++i) cloud.points[static_cast<std::size_t>(i)] = {view(i, 0), view(i, 1)};
+  return cloud;
+}
+
+/// A trajectory as an N x 4 array: t, x, y, theta.
+py::array_t<double> trajectory_array(const Trajectory& trajectory) {
+  py::array_t<double> out({static_cast<py::ssize_t>(trajectory.size()), py::ssize_t{4}});
+  auto view = out.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const auto row = static_cast<py::ssize_t>(i);
+    view(row, 0) = trajectory[i].stamp;
+    view(row, 1) = trajectory[i].pose.x();
+    view(row, 2) = trajectory[i].pose.y();
+    view(row, 3) = trajectory[i].pose.theta();
+  }
+  return out;
+}
+
+Trajectory trajectory_from(const Points& rows) {
+  if (rows.ndim() != 2 || rows.shape(1) != 4) throw py::value_error("a trajectory is an N x 4 array: t, x, y, theta");
+  const auto view = rows.unchecked<2>();
+  Trajectory trajectory;
+  trajectory.reserve(static_cast<std::size_t>(view.shape(0)));
+  for (py::ssize_t i = 0; i < view.shape(0); ++i) trajectory.push_back(view(i, 0), SE2(view(i, 1), view(i, 2), view(i, 3)));
+  return trajectory;
+}
+
+/// The map's cells as a height x width int8 array (row 0 at the smallest y; -1 unknown, 0..100).
+py::dict map_dict(const OccupancyMap& map) {
+  py::array_t<std::int8_t> cells({static_cast<py::ssize_t>(map.height), static_cast<py::ssize_t>(map.width)});
+  std::copy(map.cells.begin(), map.cells.end(), cells.mutable_data());
+  py::dict out;
+  out["cells"] = cells;
+  out["resolution"] = map.resolution;
+  out["origin"] = map.origin;
+  return out;
+}
+
+}  // namespace
+}  // namespace slam2d
+
+PYBIND11_MODULE(_slam2d, m) {
+  using namespace slam2d;
+  m.doc() = "slam2d: 2D LiDAR scan matching, SLAM, localization and evaluation (C++ library)";
+  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+
+  py::class_<SE2>(m, "SE2", "A rigid motion in the plane: rotation theta, then translation (x, y)")
+      .def(py::init<>())
+      .def(py::init<double, double, double>(), py::arg("x"), py::arg("y"), py::arg("theta"))
+      .def_property_readonly("x", &SE2::x)
+      .def_property_readonly("y", &SE2::y)
+      .def_property_readonly("theta", &SE2::theta)
+      .def("matrix", &SE2::matrix, "The 3 x 3 homogeneous matrix")
+      .def("vector", &SE2::vector, "(x, y, theta)")
+      .def("inverse", [](const SE2& p) { return p.inverse(); })
+      .def("log", [](const SE2& p) { return p.log(); }, "The tangent vector (v_x, v_y, omega)")
+      .def_static("exp", [](const Eigen::Vector3d& xi) { return SE2::exp(xi); }, py::arg("xi"))
+      .def("__mul__", [](const SE2& a, const SE2& b) { return a * b; }, py::is_operator())
+      .def("__mul__", [](const SE2& a, const Eigen::Vector2d& p) -> Eigen::Vector2d { return a * p; }, py::is_operator())
+      .def("__eq__", [](const SE2& a, const SE2& b) { return a == b; }, py::is_operator())
+      .def("__repr__", [](const SE2& p) {
+        return "SE2(x=" + std::to_string(p.x()) + ", y=" + std::to_string(p.y()) + ", theta=" + std::to_string(p.theta()) + ")";
+      })
+      .def(py::pickle([](const SE2& p) { return py::make_tuple(p.x(), p.y(), p.theta()); },
+                      [](const py::tuple& t) { return SE2(t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>()); }));
+
+  py::class_<MatchResult>(m, "MatchResult", "A scan matcher's estimate of T_target_source")
+      .def_readonly("pose", &MatchResult::T_target_source)
+      .def_readonly("covariance", &MatchResult::covariance)
+      .def_readonly("converged", &MatchResult::converged)
+      .def_readonly("iterations", &MatchResult::iterations)
+      .def_readonly("inliers", &MatchResult::inliers)
+      .def_readonly("residual", &MatchResult::residual)
+      .def_readonly("degenerate", &MatchResult::degenerate)
+      .def_readonly("weak_direction", &MatchResult::weak_direction)
+      .def("information", &MatchResult::information);
+
+  m.def("matcher_names", &matcher_names, "Every scan matcher slam2d knows, by name");
+  m.def(
+      "match",
+      [](const Points& target, const Points& source, const SE2& guess, const std::string& method, const std::string& config) {
+        const PointCloud2 target_cloud = cloud_from(target, "target");
+        const PointCloud2 source_cloud = cloud_from(source, "source");
+        const Matcher matcher =
+            config.empty() ? make_matcher(method) : make_matcher(method, ConfigNode::parse(config, "config"));
+        py::gil_scoped_release release;
+        return matcher(target_cloud, source_cloud, guess);
+      },
+      py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"), py::arg("config") = "",
+      "Matches `source` to `target` (N x 2 points) from `guess`; `config` is YAML (or JSON) of the matcher's fields");
+
+  m.def(
+      "_time_match",
+      [](const Points& target, const Points& source, const SE2& guess, const std::string& method, int repeats) {
+        // The same match looped in C++ (clouds and matcher made once): what slam2d.match's
+        // per-call overhead is measured against (bench/python/python_overhead.py).
+        const PointCloud2 target_cloud = cloud_from(target, "target");
+        const PointCloud2 source_cloud = cloud_from(source, "source");
+        const Matcher matcher = make_matcher(method);
+        py::gil_scoped_release release;
+        const auto start = std::chrono::steady_clock::now();
+        for (int i = 0; i < repeats; ++i) matcher(target_cloud, source_cloud, guess);
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / std::max(repeats, 1);
+      },
+      py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"), py::arg("repeats"),
+      "Seconds per call of the matcher looped in C++ (for the overhead benchmark)");
+
+  m.def(
+      "map_log",
+      [](const std::string& log, const std::string& method, const std::string& out_dir, const std::string& config,
+         std::optional<std::uint64_t> seed, std::optional<double> resolution, bool no_odometry, const std::string& frame) {
+        cli::MapJobOptions options;
+        options.log = log;
+        options.method = method;
+        options.out_dir = out_dir;
+        options.config = config;
+        options.seed = seed;
+        options.resolution = resolution;
+        options.no_odometry = no_odometry;
+        options.trajectory_frame = frame;
+        options.quiet = true;
+        cli::MapJobResult result;
+        {
+          py::gil_scoped_release release;
+          result = cli::run_map_job(options);
+        }
+        py::dict out;
+        out["trajectory"] = trajectory_array(result.trajectory);
+        out["map"] = map_dict(result.map);
+        out["summary"] = result.summary.dump();
+        return out;
+      },
+      py::arg("log"), py::arg("method"), py::arg("out_dir"), py::arg("config") = "", py::arg("seed") = py::none(),
+      py::arg("resolution") = py::none(), py::arg("no_odometry") = false, py::arg("trajectory_frame") = "robot",
+      "Runs `slam2d map` on a log (CARMEN or bag) and writes its outputs into out_dir");
+
+  m.def(
+      "relation_error",
+      [](const Points& trajectory, const std::string& relations_path) {
+        const Trajectory estimate = trajectory_from(trajectory);
+        const std::vector<Relation> relations = read_relations(relations_path);
+        RelationErrorResult result;
+        {
+          py::gil_scoped_release release;
+          result = relation_error(estimate, relations);
+        }
+        py::dict out;
+        out["relations"] = result.relations;
+        out["missing"] = result.missing;
+        out["trans_mean"] = result.translation.mean;
+        out["trans_std"] = result.translation.std;
+        out["rot_mean_deg"] = result.rotation_deg.mean;
+        return out;
+      },
+      py::arg("trajectory"), py::arg("relations"), "Kuemmerle et al. 2009 relation error of an N x 4 trajectory");
+}

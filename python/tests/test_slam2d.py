@@ -1,0 +1,105 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The Python API against the C++ library's properties: SE2's group laws, every matcher recovering
+a known motion, and map_log giving the command line's trajectory bit for bit."""
+
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import slam2d
+
+DATA = os.environ.get("SLAM2D_DATA")
+REQUIRE_DATA = os.environ.get("SLAM2D_REQUIRE_DATA") == "1"
+
+
+def test_se2_group_laws():
+    a = slam2d.SE2(1.0, -2.0, 0.7)
+    b = slam2d.SE2(-0.3, 0.5, -2.1)
+    np.testing.assert_allclose((a * b).matrix(), a.matrix() @ b.matrix(), atol=1e-12)
+    np.testing.assert_allclose((a * a.inverse()).vector(), [0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(slam2d.SE2.exp(a.log()).vector(), a.vector(), atol=1e-12)
+    np.testing.assert_allclose(a * np.array([1.0, 0.0]), a.matrix()[:2, :2] @ [1, 0] + [1, -2], atol=1e-12)
+    assert (a.x, a.y, a.theta) == (1.0, -2.0, 0.7)
+
+
+def room(n=720):
+    """The end points of a 360 deg scan in a 10 x 6 m room with a pillar, from (0.5, 0.3)."""
+    angles = np.linspace(-math.pi, math.pi, n, endpoint=False)
+    points = []
+    for a in angles:
+        d = np.array([math.cos(a), math.sin(a)])
+        best = np.inf
+        for axis, wall in ((0, 5.0), (0, -5.0), (1, 3.0), (1, -3.0)):
+            if abs(d[axis]) > 1e-9:
+                t = (wall - [0.5, 0.3][axis]) / d[axis]
+                if t > 0:
+                    best = min(best, t)
+        # a pillar of radius 0.4 at (2, 1)
+        o = np.array([0.5, 0.3]) - [2.0, 1.0]
+        b = o @ d
+        c = o @ o - 0.16
+        if b * b - c > 0 and -b - math.sqrt(b * b - c) > 0:
+            best = min(best, -b - math.sqrt(b * b - c))
+        points.append(best * d)
+    return np.array(points)
+
+
+@pytest.mark.parametrize("method", slam2d.matcher_names())
+def test_every_matcher_recovers_a_known_motion(method):
+    target = room()
+    truth = slam2d.SE2(0.12, -0.07, 0.04)
+    inverse = truth.inverse()
+    source = np.array([inverse * p for p in target])  # the scene seen from `truth`
+    result = slam2d.match(target, source, slam2d.SE2(), method=method)
+    assert abs(result.pose.x - truth.x) < 0.03, result.pose
+    assert abs(result.pose.y - truth.y) < 0.03, result.pose
+    assert abs(result.pose.theta - truth.theta) < 0.01, result.pose
+    assert result.covariance.shape == (3, 3)
+
+
+def test_a_config_reaches_the_matcher_and_a_bad_one_is_refused():
+    target = room()
+    few = slam2d.match(target, target, method="icp", max_iterations=1)
+    assert few.iterations <= 1
+    with pytest.raises(slam2d.Error, match="no_such_field"):
+        slam2d.match(target, target, method="icp", no_such_field=3)
+    with pytest.raises(ValueError):
+        slam2d.match(np.zeros((4, 3)), target)
+
+
+def test_scan_points_keeps_the_valid_beams():
+    points = slam2d.scan_points([1.0, np.inf, np.nan, 2.0, 50.0], -0.2, 0.1, range_max=30.0)
+    np.testing.assert_allclose(points, [[math.cos(-0.2), math.sin(-0.2)], [2 * math.cos(0.1), 2 * math.sin(0.1)]])
+
+
+def test_map_log_is_the_command_lines_run_bit_for_bit(tmp_path):
+    if not DATA:
+        if REQUIRE_DATA:
+            pytest.fail("SLAM2D_DATA is required")
+        pytest.skip("SLAM2D_DATA is not set: the real-log test is skipped")
+    log = os.path.join(DATA, "aces", "aces.clf.gz")
+    run = slam2d.map_log(log, method="graph", out=tmp_path / "python")
+    cli = os.environ.get("SLAM2D_BIN", "build/release/bin/slam2d")
+    subprocess.run([cli, "map", log, "--method", "graph", "--out", str(tmp_path / "cli"), "--quiet"], check=True,
+                   capture_output=True)
+    cli_rows = np.loadtxt(tmp_path / "cli" / "trajectory.txt", comments="#")
+    assert run.trajectory.shape == (7374, 4)
+    python_rows = np.loadtxt(tmp_path / "python" / "trajectory.txt", comments="#")
+    assert np.array_equal(python_rows, cli_rows)
+    assert run.summary["scans"] == 7374
+    assert run.map["cells"].shape == (run.summary["map_height"], run.summary["map_width"])
+    error = slam2d.relation_error(run.trajectory, os.path.join(DATA, "aces", "aces.relations"))
+    assert error["relations"] == 1279 and error["trans_mean"] < 0.05
+    cli_error = json.loads(subprocess.run([cli, "eval", str(tmp_path / "cli" / "trajectory.txt"), "--relations",
+                                           os.path.join(DATA, "aces", "aces.relations"), "--json"],
+                                          check=True, capture_output=True, text=True).stdout)
+    assert error["trans_mean"] == pytest.approx(cli_error["trans_mean"], rel=1e-9)
+
+
+def test_errors_name_the_file(tmp_path):
+    with pytest.raises(slam2d.Error, match="nothing.clf"):
+        slam2d.map_log(tmp_path / "nothing.clf")
