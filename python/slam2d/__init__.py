@@ -18,10 +18,63 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._slam2d import SE2, Error, MatchResult, matcher_names
+import yaml
+
+from ._slam2d import SE2, Error, LogReader, MatchResult, Scan, matcher_names, method_names
 from . import _slam2d
 
-__all__ = ["SE2", "Error", "MatchResult", "MapRun", "matcher_names", "match", "map_log", "relation_error", "scan_points"]
+__all__ = ["SE2", "Scan", "Error", "MatchResult", "MapRun", "LogReader", "matcher_names", "method_names", "match",
+           "map_log", "relation_error", "scan_points", "read_log", "default_config", "GraphSlam", "HectorSlam",
+           "RbpfSlam"]
+
+
+def default_config(name):
+    """A method's or matcher's configuration with its defaults, as a dict (the C++ field table's
+    fields and sections; `slam2d config dump NAME`). Change it and pass it back as `config`."""
+    config = yaml.safe_load(_slam2d.default_preset(name))
+    config.pop("method", None)
+    config.pop("matcher", None)
+    return config
+
+
+def _preset_file(method, config, folder):
+    """`config` (a dict of a method's fields) as a preset file the C++ side reads and checks."""
+    path = os.path.join(folder, f"{method}.yaml")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump({"method": method, **config}, f)  # JSON is YAML
+    return path
+
+
+def _with_config(make, method, config, fields):
+    config = {**(config or {}), **fields}
+    if not config:
+        return make("")
+    with tempfile.TemporaryDirectory(prefix="slam2d-") as folder:
+        return make(_preset_file(method, config, folder))
+
+
+def GraphSlam(config=None, **fields):
+    """Graph SLAM, one scan at a time: add_scan(scan, odom=None) -> SE2, finish(), .trajectory (N x 4),
+    .map. `config` / keywords: fields of default_config("graph"); a bad one is an Error naming it."""
+    return _with_config(_slam2d.GraphSlam, "graph", config, fields)
+
+
+def HectorSlam(config=None, **fields):
+    """Hector SLAM, one scan at a time (fields of default_config("hector"))."""
+    return _with_config(_slam2d.HectorSlam, "hector", config, fields)
+
+
+def RbpfSlam(config=None, **fields):
+    """The Rao-Blackwellized particle filter, one scan at a time (fields of default_config("rbpf"));
+    add_scan needs the odometry pose."""
+    return _with_config(_slam2d.RbpfSlam, "rbpf", config, fields)
+
+
+def read_log(path, scan_topic="", odom_topic="", fov_deg=None):
+    """The messages of a log (CARMEN, ROS 1 bag, MCAP file, rosbag2 folder) in order, as dicts:
+    {"kind": "scan", "scan": Scan (ranges as numpy), "odom": SE2 or None, "type": ...},
+    {"kind": "odometry", "stamp", "pose", "tv", "rv"}, {"kind": "imu", ...}, {"kind": "true_pose", ...}."""
+    return LogReader(os.fspath(path), scan_topic, odom_topic, fov_deg)
 
 
 def _config_text(config):
@@ -63,10 +116,13 @@ def map_log(log, method="graph", out=None, config=None, seed=None, resolution=No
             trajectory_frame="robot"):
     """Maps a log (CARMEN, ROS 1 bag, MCAP or rosbag2 folder) as `slam2d map` does, with the same
     code: the trajectory is the CLI's, bit for bit. `out` is the output folder (a temporary one,
-    removed afterwards, when None); `config` a preset file (configs/<method>.yaml)."""
+    removed afterwards, when None); `config` a preset file (configs/<method>.yaml) or a dict of the
+    method's fields (default_config(method))."""
     def run(folder):
-        result = _slam2d.map_log(os.fspath(log), method, folder, config or "", seed, resolution, no_odometry,
-                                 trajectory_frame)
+        with tempfile.TemporaryDirectory(prefix="slam2d-") as presets:
+            preset = _preset_file(method, config, presets) if isinstance(config, dict) else os.fspath(config or "")
+            result = _slam2d.map_log(os.fspath(log), method, folder, preset, seed, resolution, no_odometry,
+                                     trajectory_frame)
         return MapRun(result["trajectory"], result["map"], json.loads(result["summary"]), folder)
     if out is not None:
         return run(os.fspath(out))

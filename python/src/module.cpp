@@ -14,6 +14,12 @@
 #include <string>
 
 #include "map_job.hpp"
+#include "slam2d/grid/occupancy_grid.hpp"
+#include "slam2d/io/log_reader.hpp"
+#include "slam2d/methods/method_presets.hpp"
+#include "slam2d/slam/graph/graph_slam.hpp"
+#include "slam2d/slam/hector/hector_slam.hpp"
+#include "slam2d/slam/rbpf/rbpf_slam.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/se2.hpp"
@@ -75,6 +81,55 @@ py::dict map_dict(const OccupancyMap& map) {
   return out;
 }
 
+/// A scan's ranges as a float64 array (a copy: the scan owns them).
+py::array_t<double> ranges_array(const LaserScan& scan) {
+  py::array_t<double> out(static_cast<py::ssize_t>(scan.ranges.size()));
+  std::copy(scan.ranges.begin(), scan.ranges.end(), out.mutable_data());
+  return out;
+}
+
+std::vector<double> ranges_from(const py::array_t<double, py::array::c_style | py::array::forcecast>& ranges) {
+  if (ranges.ndim() != 1) throw py::value_error("ranges must be a 1-D array");
+  return {ranges.data(), ranges.data() + ranges.size()};
+}
+
+/// One message of a log as a dict: kind "scan" (scan, odom or None, type), "odometry" (stamp,
+/// pose, tv, rv), "imu" (stamp, roll, pitch, yaw_rate), "true_pose" (stamp, pose, odom).
+py::dict message_dict(const SensorMessage& message) {
+  py::dict out;
+  if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+    out["kind"] = "scan";
+    out["scan"] = laser->scan;
+    out["odom"] = laser->has_poses ? py::cast(laser->odom_pose) : py::none();
+    out["type"] = laser->type;
+  } else if (const auto* odometry = std::get_if<OdometryMessage>(&message)) {
+    out["kind"] = "odometry";
+    out["stamp"] = odometry->reading.stamp;
+    out["pose"] = odometry->reading.pose;
+    out["tv"] = odometry->reading.tv;
+    out["rv"] = odometry->reading.rv;
+  } else if (const auto* imu = std::get_if<ImuMessage>(&message)) {
+    out["kind"] = "imu";
+    out["stamp"] = imu->reading.stamp;
+    out["roll"] = imu->reading.roll;
+    out["pitch"] = imu->reading.pitch;
+    out["yaw_rate"] = imu->reading.yaw_rate;
+  } else {
+    const auto& truth = std::get<TruePoseMessage>(message);
+    out["kind"] = "true_pose";
+    out["stamp"] = truth.stamp;
+    out["pose"] = truth.true_pose;
+    out["odom"] = truth.odom_pose;
+  }
+  return out;
+}
+
+/// Each SLAM method with its configuration from a preset file (empty: the defaults).
+template <typename Config>
+Config method_config(const std::string& preset, const std::string& method) {
+  return read_method_preset(preset, method, Config{});
+}
+
 }  // namespace
 }  // namespace slam2d
 
@@ -114,6 +169,101 @@ PYBIND11_MODULE(_slam2d, m) {
       .def_readonly("weak_direction", &MatchResult::weak_direction)
       .def("information", &MatchResult::information);
 
+  py::class_<LaserScan>(m, "Scan", "One sweep of a planar range finder (sensor_msgs/LaserScan's fields)")
+      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& ranges, double angle_min,
+                       double angle_increment, double range_max, double range_min, double stamp, const SE2& mounting) {
+             LaserScan scan;
+             scan.ranges = ranges_from(ranges);
+             scan.angle_min = angle_min;
+             scan.angle_increment = angle_increment;
+             scan.range_max = range_max;
+             scan.range_min = range_min;
+             scan.stamp = stamp;
+             scan.T_robot_sensor = mounting;
+             return scan;
+           }),
+           py::arg("ranges"), py::arg("angle_min"), py::arg("angle_increment"), py::arg("range_max"),
+           py::arg("range_min") = 0.0, py::arg("stamp") = 0.0, py::arg("T_robot_sensor") = SE2())
+      .def_property("ranges", &ranges_array, [](LaserScan& scan, const py::array_t<double, py::array::c_style | py::array::forcecast>& r) {
+        scan.ranges = ranges_from(r);
+      })
+      .def_readwrite("stamp", &LaserScan::stamp)
+      .def_readwrite("angle_min", &LaserScan::angle_min)
+      .def_readwrite("angle_increment", &LaserScan::angle_increment)
+      .def_readwrite("range_min", &LaserScan::range_min)
+      .def_readwrite("range_max", &LaserScan::range_max)
+      .def_readwrite("T_robot_sensor", &LaserScan::T_robot_sensor)
+      .def("points", [](const LaserScan& scan, bool robot_frame) {
+        const ScanPoints points = to_point_cloud(scan, robot_frame ? ScanFrame::kRobot : ScanFrame::kSensor);
+        py::array_t<double> out({static_cast<py::ssize_t>(points.cloud.size()), py::ssize_t{2}});
+        auto view = out.mutable_unchecked<2>();
+        for (std::size_t i = 0; i < points.cloud.size(); ++i) {
+          view(static_cast<py::ssize_t>(i), 0) = points.cloud.points[i].x();
+          view(static_cast<py::ssize_t>(i), 1) = points.cloud.points[i].y();
+        }
+        return out;
+      }, py::arg("robot_frame") = true, "The valid beams' end points, N x 2, in the robot (or sensor) frame");
+
+  py::class_<LogReader>(m, "LogReader", "A log (CARMEN, ROS 1 bag, MCAP, rosbag2) as an iterator of messages")
+      .def(py::init([](const std::string& path, const std::string& scan_topic, const std::string& odom_topic,
+                       std::optional<double> fov_deg) {
+             LogReaderOptions options;
+             options.bag.scan_topic = scan_topic;
+             options.bag.odom_topic = odom_topic;
+             if (fov_deg) options.carmen.geometry.field_of_view = *fov_deg * 3.14159265358979323846 / 180.0;
+             return std::make_unique<LogReader>(path, options);
+           }),
+           py::arg("path"), py::arg("scan_topic") = "", py::arg("odom_topic") = "", py::arg("fov_deg") = py::none())
+      .def("__iter__", [](LogReader& reader) -> LogReader& { return reader; })
+      .def("__next__", [](LogReader& reader) {
+        std::optional<SensorMessage> message = reader.next();
+        if (!message) throw py::stop_iteration();
+        return message_dict(*message);
+      })
+      .def_property_readonly("format", [](const LogReader& reader) { return std::string(log_format_name(reader.format())); })
+      .def_property_readonly("progress", &LogReader::progress);
+
+  py::class_<GraphSlam>(m, "GraphSlam", "Graph SLAM, one scan at a time (configs/graph.yaml's fields)")
+      .def(py::init([](const std::string& preset) { return GraphSlam(method_config<GraphSlamConfig>(preset, "graph")); }),
+           py::arg("preset") = "")
+      .def("add_scan", [](GraphSlam& slam, const LaserScan& scan, std::optional<SE2> odom) {
+        py::gil_scoped_release release;
+        return slam.add_scan(scan, odom).T_map_robot;
+      }, py::arg("scan"), py::arg("odom") = py::none())
+      .def("finish", [](GraphSlam& slam) {
+        py::gil_scoped_release release;
+        slam.finish();
+      })
+      .def_property_readonly("trajectory", [](const GraphSlam& slam) { return trajectory_array(slam.trajectory()); })
+      .def_property_readonly("map", [](const GraphSlam& slam) { return map_dict(slam.map()); });
+
+  py::class_<HectorSlam>(m, "HectorSlam", "Hector SLAM, one scan at a time (configs/hector.yaml's fields)")
+      .def(py::init([](const std::string& preset) { return std::make_unique<HectorSlam>(method_config<HectorSlamConfig>(preset, "hector")); }),
+           py::arg("preset") = "")
+      .def("add_scan", [](HectorSlam& slam, const LaserScan& scan, std::optional<SE2> odom) {
+        py::gil_scoped_release release;
+        HectorInputs inputs;
+        inputs.T_odom_robot = odom;
+        return slam.add_scan(scan, inputs).T_map_robot;
+      }, py::arg("scan"), py::arg("odom") = py::none())
+      .def("finish", [](HectorSlam&) {})
+      .def_property_readonly("trajectory", [](const HectorSlam& slam) { return trajectory_array(slam.trajectory()); })
+      .def_property_readonly("map", [](const HectorSlam& slam) { return map_dict(slam.map().level(0).to_occupancy_map()); });
+
+  py::class_<RbpfSlam>(m, "RbpfSlam", "The Rao-Blackwellized particle filter, one scan at a time (configs/rbpf.yaml's fields)")
+      .def(py::init([](const std::string& preset) { return std::make_unique<RbpfSlam>(method_config<RbpfConfig>(preset, "rbpf")); }),
+           py::arg("preset") = "")
+      .def("add_scan", [](RbpfSlam& slam, const LaserScan& scan, std::optional<SE2> odom) {
+        if (!odom) throw py::value_error("the particle filter needs the odometry pose at each scan");
+        py::gil_scoped_release release;
+        return slam.add_scan(scan, *odom).T_map_robot;
+      }, py::arg("scan"), py::arg("odom") = py::none())
+      .def("finish", [](RbpfSlam&) {})
+      .def_property_readonly("trajectory", [](const RbpfSlam& slam) { return trajectory_array(slam.trajectory()); })
+      .def_property_readonly("map", [](const RbpfSlam& slam) { return map_dict(slam.map().to_occupancy_map()); });
+
+  m.def("method_names", &method_names, "The SLAM and localization methods with a configuration");
+  m.def("default_preset", &default_preset, py::arg("name"), "A method's or matcher's defaults as a preset (YAML)");
   m.def("matcher_names", &matcher_names, "Every scan matcher slam2d knows, by name");
   m.def(
       "match",

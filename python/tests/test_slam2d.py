@@ -103,3 +103,54 @@ def test_map_log_is_the_command_lines_run_bit_for_bit(tmp_path):
 def test_errors_name_the_file(tmp_path):
     with pytest.raises(slam2d.Error, match="nothing.clf"):
         slam2d.map_log(tmp_path / "nothing.clf")
+
+
+def require_data():
+    if not DATA:
+        if REQUIRE_DATA:
+            pytest.fail("SLAM2D_DATA is required")
+        pytest.skip("SLAM2D_DATA is not set: the real-log test is skipped")
+
+
+def test_graph_slam_one_scan_at_a_time_is_map_log():
+    require_data()
+    log = os.path.join(DATA, "aces", "aces.clf.gz")
+    slam = slam2d.GraphSlam()
+    scans = 0
+    for message in slam2d.read_log(log):
+        if message["kind"] == "scan":
+            assert isinstance(message["scan"].ranges, np.ndarray) and message["scan"].ranges.size == 180
+            slam.add_scan(message["scan"], message["odom"])
+            scans += 1
+    slam.finish()
+    assert scans == 7374
+    batch = slam2d.map_log(log, method="graph")
+    assert np.array_equal(slam.trajectory, batch.trajectory)
+    assert np.array_equal(slam.map["cells"], batch.map["cells"])
+
+
+def test_configs_are_dicts_of_the_field_tables(tmp_path):
+    config = slam2d.default_config("graph")
+    assert config["map_resolution"] == 0.05
+    slam = slam2d.GraphSlam(config, map_resolution=0.1)
+    ranges = np.full(360, 3.0)
+    slam.add_scan(slam2d.Scan(ranges, -math.pi, 2 * math.pi / 360, 30.0), slam2d.SE2())
+    slam.finish()
+    assert slam.map["resolution"] == 0.1
+    assert slam.trajectory.shape == (1, 4)
+    with pytest.raises(slam2d.Error, match="map_resolutoin"):
+        slam2d.GraphSlam(map_resolutoin=0.1)
+    with pytest.raises(ValueError):
+        slam2d.RbpfSlam().add_scan(slam2d.Scan(ranges, -math.pi, 0.01, 30.0))
+    for name in slam2d.method_names() + slam2d.matcher_names():
+        assert isinstance(slam2d.default_config(name), dict), name
+
+
+def test_read_log_reads_bags_and_scans_give_points():
+    require_data()
+    messages = list(slam2d.read_log(os.path.join(DATA, "bags", "ros1", "aces_head_lz4.bag")))
+    scans = [m for m in messages if m["kind"] == "scan"]
+    assert len(scans) == 600
+    assert sum(m["kind"] == "odometry" for m in messages) > 500
+    points = scans[0]["scan"].points()
+    assert points.ndim == 2 and points.shape[1] == 2 and 0 < len(points) <= 180
