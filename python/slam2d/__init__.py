@@ -25,7 +25,7 @@ from . import _slam2d
 
 __all__ = ["SE2", "Scan", "Error", "MatchResult", "MapRun", "LogReader", "matcher_names", "method_names", "match",
            "map_log", "relation_error", "scan_points", "read_log", "default_config", "GraphSlam", "HectorSlam",
-           "RbpfSlam"]
+           "RbpfSlam", "Localizer"]
 
 
 def default_config(name):
@@ -68,6 +68,17 @@ def RbpfSlam(config=None, **fields):
     """The Rao-Blackwellized particle filter, one scan at a time (fields of default_config("rbpf"));
     add_scan needs the odometry pose."""
     return _with_config(_slam2d.RbpfSlam, "rbpf", config, fields)
+
+
+def Localizer(map, method="mcl", initial=None, sigma=(0.3, 0.3, 0.2), config=None, particles=None, seed=None, **fields):
+    """Localization in a known map (a map YAML, e.g. from map_log) with `method` markov, ekf, mcl or
+    hybrid, started at `initial` (an SE2, with standard deviations `sigma`) or globally (None; not
+    the EKF). update(odom, scan) -> {"pose": SE2, "covariance": 3 x 3, "localized": bool};
+    .trajectory. `config` / keywords: fields of default_config(method)."""
+    def make(preset):
+        return _slam2d.Localizer(os.fspath(map), method, initial, np.asarray(sigma, dtype=np.float64), preset, particles,
+                                 seed)
+    return _with_config(make, method, config, fields)
 
 
 def read_log(path, scan_topic="", odom_topic="", fov_deg=None):

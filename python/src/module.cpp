@@ -3,6 +3,7 @@
 // Arrays come in as float64 N x 2 (points) or N (ranges) and go out as numpy arrays; long calls
 // release the GIL.
 
+#include <fmt/core.h>
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -13,9 +14,12 @@
 #include <filesystem>
 #include <string>
 
+#include "localize_job.hpp"
 #include "map_job.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/io/log_reader.hpp"
+#include "slam2d/io/map_io.hpp"
+#include "slam2d/localization/session.hpp"
 #include "slam2d/methods/method_presets.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
@@ -261,6 +265,50 @@ PYBIND11_MODULE(_slam2d, m) {
       .def("finish", [](RbpfSlam&) {})
       .def_property_readonly("trajectory", [](const RbpfSlam& slam) { return trajectory_array(slam.trajectory()); })
       .def_property_readonly("map", [](const RbpfSlam& slam) { return map_dict(slam.map().to_occupancy_map()); });
+
+  // A localizer in a known map, with the map it reads (the session follows the robot through
+  // odometry stalls, as `slam2d localize` does).
+  struct PyLocalizer {
+    LocalizationMap map;
+    std::unique_ptr<Localizer> localizer;
+    std::unique_ptr<LocalizationSession> session;
+  };
+  py::class_<PyLocalizer>(m, "Localizer", "Localization in a known map (markov, ekf, mcl, hybrid), one scan at a time")
+      .def(py::init([](const std::string& map_yaml, const std::string& method, std::optional<SE2> initial,
+                       const Eigen::Vector3d& sigma, const std::string& preset, std::optional<std::size_t> particles,
+                       std::optional<std::uint64_t> seed) {
+             auto out = std::make_unique<PyLocalizer>(PyLocalizer{LocalizationMap(read_map(map_yaml)), nullptr, nullptr});
+             cli::LocalizeOptions options;
+             options.method = method;
+             options.global = !initial.has_value();
+             if (initial) {
+               options.initial = fmt::format("{},{},{}", initial->x(), initial->y(), initial->theta());
+               options.initial_sigma = fmt::format("{},{},{}", sigma.x(), sigma.y(), sigma.z());
+             }
+             options.config = preset;
+             options.particles = particles;
+             options.seed = seed;
+             cli::JsonObject settings;
+             out->localizer = cli::make_localizer(options, out->map, settings);
+             out->session = std::make_unique<LocalizationSession>(*out->localizer, std::nullopt, OdometryGuardConfig{}, &out->map);
+             return out;
+           }),
+           py::arg("map"), py::arg("method") = "mcl", py::arg("initial") = py::none(),
+           py::arg("sigma") = Eigen::Vector3d(0.3, 0.3, 0.2), py::arg("preset") = "", py::arg("particles") = py::none(),
+           py::arg("seed") = py::none())
+      .def("update", [](PyLocalizer& self, const SE2& odom, const LaserScan& scan) {
+        LocalizationEstimate estimate;
+        {
+          py::gil_scoped_release release;
+          estimate = self.session->add(odom, scan);
+        }
+        py::dict out;
+        out["pose"] = estimate.pose;
+        out["covariance"] = estimate.covariance;
+        out["localized"] = estimate.localized;
+        return out;
+      }, py::arg("odom"), py::arg("scan"), "One step: the odometry pose at the scan and the scan; the estimate")
+      .def_property_readonly("trajectory", [](const PyLocalizer& self) { return trajectory_array(self.session->trajectory()); });
 
   m.def("method_names", &method_names, "The SLAM and localization methods with a configuration");
   m.def("default_preset", &default_preset, py::arg("name"), "A method's or matcher's defaults as a preset (YAML)");

@@ -154,3 +154,27 @@ def test_read_log_reads_bags_and_scans_give_points():
     assert sum(m["kind"] == "odometry" for m in messages) > 500
     points = scans[0]["scan"].points()
     assert points.ndim == 2 and points.shape[1] == 2 and 0 < len(points) <= 180
+
+
+def test_localizer_is_the_command_lines_localize(tmp_path):
+    cli = os.environ.get("SLAM2D_BIN", "build/release/bin/slam2d")
+    log, truth = str(tmp_path / "office.clf"), str(tmp_path / "truth.txt")
+    subprocess.run([cli, "simulate", "--quiet", "--duration", "60", "--seed", "3", "--out", log, "--truth", truth], check=True)
+    slam2d.map_log(log, method="odometry", out=tmp_path / "map")
+    x, y, theta = np.loadtxt(truth, comments="#")[0][1:4]
+    for method in ("mcl", "ekf"):
+        localizer = slam2d.Localizer(tmp_path / "map" / "map.yaml", method=method, initial=slam2d.SE2(x, y, theta), seed=2)
+        last = None
+        for message in slam2d.read_log(log):
+            if message["kind"] == "scan":
+                last = localizer.update(message["odom"], message["scan"])
+        assert last["localized"], method
+        out = tmp_path / f"{method}.txt"
+        subprocess.run([cli, "localize", log, "--map", str(tmp_path / "map" / "map.yaml"), "--method", method,
+                        f"--initial={x!r},{y!r},{theta!r}", "--seed", "2", "--out", str(out), "--quiet"],
+                       check=True, capture_output=True)
+        cli_rows = np.loadtxt(out, comments="#")
+        assert localizer.trajectory.shape == cli_rows.shape, method
+        np.testing.assert_allclose(localizer.trajectory, cli_rows, rtol=0, atol=1e-9, err_msg=method)
+    with pytest.raises(slam2d.Error, match="EKF has no global mode"):
+        slam2d.Localizer(tmp_path / "map" / "map.yaml", method="ekf")
