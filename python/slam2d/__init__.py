@@ -20,10 +20,10 @@ import numpy as np
 
 import yaml
 
-from ._slam2d import SE2, Error, LogReader, MatchResult, Scan, matcher_names, method_names
+from ._slam2d import SE2, Cloud, Error, LogReader, MatchResult, Scan, matcher_names, method_names
 from . import _slam2d
 
-__all__ = ["SE2", "Scan", "Error", "MatchResult", "MapRun", "LogReader", "matcher_names", "method_names", "match",
+__all__ = ["SE2", "Cloud", "Scan", "Error", "MatchResult", "MapRun", "LogReader", "matcher_names", "method_names", "match",
            "map_log", "relation_error", "scan_points", "read_log", "default_config", "GraphSlam", "HectorSlam",
            "RbpfSlam", "Localizer"]
 
@@ -101,14 +101,19 @@ def scan_points(ranges, angle_min, angle_increment, range_max=np.inf, range_min=
     return np.column_stack((ranges[valid] * np.cos(angles[valid]), ranges[valid] * np.sin(angles[valid])))
 
 
+def _cloud(points):
+    return points if isinstance(points, Cloud) else np.asarray(points, dtype=np.float64)
+
+
 def match(target, source, guess=None, method="pl-icp", **config):
-    """Matches `source` to `target` (N x 2 points, or anything numpy makes one of) from `guess`
+    """Matches `source` to `target` (N x 2 points, anything numpy makes one of, or a Cloud: made once,
+    matched many times without copying its points again) from `guess`
     (an SE2, identity by default) with the scan matcher `method` (slam2d.matcher_names()); keyword
     arguments set fields of its configuration, as a preset file would (`slam2d config dump NAME`).
     Returns a MatchResult: .pose (SE2 T_target_source), .covariance (3 x 3), .degenerate,
     .weak_direction, .iterations, .inliers, .converged, .residual."""
-    return _slam2d.match(np.asarray(target, dtype=np.float64), np.asarray(source, dtype=np.float64),
-                         guess if guess is not None else SE2(), method, _config_text(config))
+    return _slam2d.match(_cloud(target), _cloud(source), guess if guess is not None else SE2(), method,
+                         _config_text(config))
 
 
 @dataclass

@@ -51,6 +51,17 @@ PointCloud2 cloud_from(const Points& points, const char* name) {
   return cloud;
 }
 
+/// A cloud's points as an N x 2 array.
+py::array_t<double> points_array(const PointCloud2& cloud) {
+  py::array_t<double> out({static_cast<py::ssize_t>(cloud.size()), py::ssize_t{2}});
+  auto view = out.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    view(static_cast<py::ssize_t>(i), 0) = cloud.points[i].x();
+    view(static_cast<py::ssize_t>(i), 1) = cloud.points[i].y();
+  }
+  return out;
+}
+
 /// A trajectory as an N x 4 array: t, x, y, theta.
 py::array_t<double> trajectory_array(const Trajectory& trajectory) {
   py::array_t<double> out({static_cast<py::ssize_t>(trajectory.size()), py::ssize_t{4}});
@@ -198,14 +209,7 @@ PYBIND11_MODULE(_slam2d, m) {
       .def_readwrite("range_max", &LaserScan::range_max)
       .def_readwrite("T_robot_sensor", &LaserScan::T_robot_sensor)
       .def("points", [](const LaserScan& scan, bool robot_frame) {
-        const ScanPoints points = to_point_cloud(scan, robot_frame ? ScanFrame::kRobot : ScanFrame::kSensor);
-        py::array_t<double> out({static_cast<py::ssize_t>(points.cloud.size()), py::ssize_t{2}});
-        auto view = out.mutable_unchecked<2>();
-        for (std::size_t i = 0; i < points.cloud.size(); ++i) {
-          view(static_cast<py::ssize_t>(i), 0) = points.cloud.points[i].x();
-          view(static_cast<py::ssize_t>(i), 1) = points.cloud.points[i].y();
-        }
-        return out;
+        return points_array(to_point_cloud(scan, robot_frame ? ScanFrame::kRobot : ScanFrame::kSensor).cloud);
       }, py::arg("robot_frame") = true, "The valid beams' end points, N x 2, in the robot (or sensor) frame");
 
   py::class_<LogReader>(m, "LogReader", "A log (CARMEN, ROS 1 bag, MCAP, rosbag2) as an iterator of messages")
@@ -313,15 +317,26 @@ PYBIND11_MODULE(_slam2d, m) {
   m.def("method_names", &method_names, "The SLAM and localization methods with a configuration");
   m.def("default_preset", &default_preset, py::arg("name"), "A method's or matcher's defaults as a preset (YAML)");
   m.def("matcher_names", &matcher_names, "Every scan matcher slam2d knows, by name");
+  py::class_<PointCloud2>(m, "Cloud",
+                          "A point cloud in slam2d's own memory: made once from N x 2 points, then matched "
+                          "any number of times without another copy")
+      .def(py::init([](const Points& points) { return cloud_from(points, "points"); }), py::arg("points"))
+      .def("__len__", &PointCloud2::size)
+      .def("points", &points_array);
+
+  const auto match_clouds = [](const PointCloud2& target, const PointCloud2& source, const SE2& guess,
+                               const std::string& method, const std::string& config) {
+    const Matcher matcher = config.empty() ? make_matcher(method) : make_matcher(method, ConfigNode::parse(config, "config"));
+    py::gil_scoped_release release;
+    return matcher(target, source, guess);
+  };
+  m.def("match", match_clouds, py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"),
+        py::arg("config") = "", "Matches `source` to `target` (Clouds) from `guess`; `config` is YAML (or JSON)");
   m.def(
       "match",
-      [](const Points& target, const Points& source, const SE2& guess, const std::string& method, const std::string& config) {
-        const PointCloud2 target_cloud = cloud_from(target, "target");
-        const PointCloud2 source_cloud = cloud_from(source, "source");
-        const Matcher matcher =
-            config.empty() ? make_matcher(method) : make_matcher(method, ConfigNode::parse(config, "config"));
-        py::gil_scoped_release release;
-        return matcher(target_cloud, source_cloud, guess);
+      [match_clouds](const Points& target, const Points& source, const SE2& guess, const std::string& method,
+                     const std::string& config) {
+        return match_clouds(cloud_from(target, "target"), cloud_from(source, "source"), guess, method, config);
       },
       py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"), py::arg("config") = "",
       "Matches `source` to `target` (N x 2 points) from `guess`; `config` is YAML (or JSON) of the matcher's fields");

@@ -61,6 +61,18 @@ def test_every_matcher_recovers_a_known_motion(method):
     assert result.covariance.shape == (3, 3)
 
 
+def test_clouds_made_once_match_as_the_arrays_do():
+    target = room()
+    source = np.array([slam2d.SE2(0.05, 0.02, 0.01).inverse() * p for p in target])
+    cloud_target, cloud_source = slam2d.Cloud(target), slam2d.Cloud(source)
+    assert len(cloud_target) == len(target)
+    np.testing.assert_array_equal(cloud_target.points(), target)
+    for method in ("icp", "pl-icp"):
+        from_arrays = slam2d.match(target, source, method=method)
+        from_clouds = slam2d.match(cloud_target, cloud_source, method=method)
+        assert from_clouds.pose == from_arrays.pose
+
+
 def test_a_config_reaches_the_matcher_and_a_bad_one_is_refused():
     target = room()
     few = slam2d.match(target, target, method="icp", max_iterations=1)
