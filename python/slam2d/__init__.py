@@ -101,10 +101,6 @@ def scan_points(ranges, angle_min, angle_increment, range_max=np.inf, range_min=
     return np.column_stack((ranges[valid] * np.cos(angles[valid]), ranges[valid] * np.sin(angles[valid])))
 
 
-def _cloud(points):
-    return points if isinstance(points, Cloud) else np.asarray(points, dtype=np.float64)
-
-
 def match(target, source, guess=None, method="pl-icp", **config):
     """Matches `source` to `target` (N x 2 points, anything numpy makes one of, or a Cloud: made once,
     matched many times without copying its points again) from `guess`
@@ -112,7 +108,10 @@ def match(target, source, guess=None, method="pl-icp", **config):
     arguments set fields of its configuration, as a preset file would (`slam2d config dump NAME`).
     Returns a MatchResult: .pose (SE2 T_target_source), .covariance (3 x 3), .degenerate,
     .weak_direction, .iterations, .inliers, .converged, .residual."""
-    return _slam2d.match(_cloud(target), _cloud(source), guess if guess is not None else SE2(), method,
+    guess = guess if guess is not None else SE2()
+    if isinstance(target, Cloud) and isinstance(source, Cloud):
+        return _slam2d.match_clouds(target, source, guess, method, _config_text(config))
+    return _slam2d.match(np.asarray(target, dtype=np.float64), np.asarray(source, dtype=np.float64), guess, method,
                          _config_text(config))
 
 

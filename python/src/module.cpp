@@ -330,7 +330,7 @@ PYBIND11_MODULE(_slam2d, m) {
     py::gil_scoped_release release;
     return matcher(target, source, guess);
   };
-  m.def("match", match_clouds, py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"),
+  m.def("match_clouds", match_clouds, py::arg("target"), py::arg("source"), py::arg("guess"), py::arg("method"),
         py::arg("config") = "", "Matches `source` to `target` (Clouds) from `guess`; `config` is YAML (or JSON)");
   m.def(
       "match",
