@@ -19,5 +19,6 @@ void add_localize_command(CLI::App& app);
 void add_perturb_command(CLI::App& app);
 void add_config_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
+void add_fuse_command(CLI::App& app);
 
 }  // namespace slam2d::cli

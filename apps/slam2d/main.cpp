@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   slam2d::cli::add_perturb_command(app);
   slam2d::cli::add_config_command(app);
   slam2d::cli::add_convert_command(app);
+  slam2d::cli::add_fuse_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
