@@ -24,6 +24,7 @@
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
+#include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/se2.hpp"
@@ -218,7 +219,7 @@ PYBIND11_MODULE(_slam2d, m) {
              LogReaderOptions options;
              options.bag.scan_topic = scan_topic;
              options.bag.odom_topic = odom_topic;
-             if (fov_deg) options.carmen.geometry.field_of_view = *fov_deg * 3.14159265358979323846 / 180.0;
+             if (fov_deg) options.carmen.geometry.field_of_view = deg_to_rad(*fov_deg);
              return std::make_unique<LogReader>(path, options);
            }),
            py::arg("path"), py::arg("scan_topic") = "", py::arg("odom_topic") = "", py::arg("fov_deg") = py::none())

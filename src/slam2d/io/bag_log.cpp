@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "slam2d/core/error.hpp"
@@ -158,7 +159,7 @@ void BagLogReader::take(DecodedRecord record) {
 void BagLogReader::check_declared_geometry(const LaserScan& scan) {
   // An even beam count spread over exactly 180 deg, first beam at -90 deg: what a converter writes
   // for CARMEN's 180 (360) beams of 1 (0.5) deg, which span 179 (179.5) deg (the Intel bag).
-  constexpr double kPi = 3.14159265358979323846;
+  constexpr double kPi = std::numbers::pi;
   constexpr double kTolerance = 1e-5;  // rad: the declared angles are float32
   const std::size_t n = scan.size();
   if (geometry_.any() || n < 2 || n % 2 != 0) return;

@@ -14,6 +14,7 @@
 #include "slam2d/io/detail/compression.hpp"
 #include "slam2d/io/detail/mcap_records.hpp"
 #include "slam2d/io/detail/message_definitions.hpp"
+#include "slam2d/io/detail/ros_time.hpp"
 
 namespace slam2d {
 namespace {
@@ -253,12 +254,8 @@ void McapWriter::commit() {
 }
 
 std::uint64_t seconds_to_nanoseconds(double stamp) {
-  if (!(stamp >= 0.0) || !(stamp < 1.8e10)) {
-    throw Error("stamp " + std::to_string(stamp) + " s is not a ROS time (0 to 1.8e10 s)");
-  }
-  const double whole = std::floor(stamp);
-  return static_cast<std::uint64_t>(whole) * 1'000'000'000u +
-         static_cast<std::uint64_t>(std::llround((stamp - whole) * 1e9));
+  const detail::SplitStamp t = detail::split_stamp(stamp, 0.0, 1.8e10, "a ROS time in ns (0 to 1.8e10 s)");
+  return static_cast<std::uint64_t>(t.sec) * 1'000'000'000u + t.nsec;
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
+#include "slam2d/io/detail/ros_time.hpp"
 
 namespace slam2d::detail {
 namespace {
@@ -244,17 +245,9 @@ CdrWriter& CdrWriter::count(std::size_t n) {
 }
 
 CdrWriter& CdrWriter::time(double stamp) {
-  const double sec = std::floor(stamp);
-  if (!std::isfinite(stamp) || sec < std::numeric_limits<std::int32_t>::min() || sec > std::numeric_limits<std::int32_t>::max()) {
-    throw Error("CDR: stamp " + std::to_string(stamp) + " s does not fit builtin_interfaces/Time");
-  }
-  auto nanosec = static_cast<std::int64_t>(std::llround((stamp - sec) * 1e9));
-  auto whole = static_cast<std::int64_t>(sec);
-  if (nanosec >= 1'000'000'000) {  // rounded up to the next second
-    nanosec -= 1'000'000'000;
-    ++whole;
-  }
-  return put(static_cast<std::int32_t>(whole)).put(static_cast<std::uint32_t>(nanosec));
+  const SplitStamp t = split_stamp(stamp, std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max(),
+                                   "builtin_interfaces/Time");
+  return put(static_cast<std::int32_t>(t.sec)).put(t.nsec);
 }
 
 CdrWriter& CdrWriter::header(double stamp, std::string_view frame_id) { return time(stamp).string(frame_id); }

@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
+#include "slam2d/io/detail/ros_time.hpp"
 
 namespace slam2d::ros1 {
 
@@ -211,18 +212,8 @@ MessageType message_type_of(const DecodedMessage& message) {
 std::string_view type_name(MessageType type) { return kTypes[static_cast<std::size_t>(type)].name; }
 
 Time to_time(double stamp) {
-  if (!(stamp >= 0.0) || !(stamp < 4294967296.0)) {
-    throw Error("stamp " + std::to_string(stamp) + " s does not fit a ROS 1 time (0 to 2^32 s)");
-  }
-  const double whole = std::floor(stamp);
-  auto sec = static_cast<std::uint64_t>(whole);
-  auto nsec = static_cast<std::uint64_t>(std::llround((stamp - whole) * 1e9));
-  if (nsec >= 1'000'000'000u) {
-    nsec -= 1'000'000'000u;
-    ++sec;
-  }
-  if (sec > 0xFFFFFFFFu) throw Error("stamp " + std::to_string(stamp) + " s does not fit a ROS 1 time");
-  return {static_cast<std::uint32_t>(sec), static_cast<std::uint32_t>(nsec)};
+  const detail::SplitStamp t = detail::split_stamp(stamp, 0.0, 4294967295.0, "a ROS 1 time (0 to 2^32 s)");
+  return {static_cast<std::uint32_t>(t.sec), t.nsec};
 }
 
 std::vector<std::uint8_t> encode_message(const DecodedMessage& message, std::uint32_t seq) {
