@@ -44,7 +44,7 @@ void run_demo(const DemoOptions& options) {
   map_options.quiet = options.quiet;
   const MapJobResult mapped = run_map_job(map_options);
   JsonObject accuracy;
-  const ReferenceError error = add_reference_error(accuracy, mapped.trajectory, run.truth, 0.001, 1.0);
+  const ReferenceError error = add_reference_error(accuracy, mapped.trajectory, run.truth, RpeConfig{});
   JsonObject json;
   json.add("world", options.config.world).add("seed", static_cast<std::size_t>(options.config.seed));
   json.add("log", log).add("truth", truth_path).add("out", options.out);

@@ -23,6 +23,7 @@ struct EvalOptions {
   std::string reference;
   double stamp_tolerance = 0.001;
   double rpe_delta = 1.0;
+  std::string rpe_window = "distance";  // distance (m) | time (s)
   bool json = false;
 };
 
@@ -37,8 +38,10 @@ void run_eval(const EvalOptions& options) {
     add_relation_error(json, estimate, read_relations(options.relations), options.stamp_tolerance);
   } else {
     json.add("reference", options.reference);
-    add_reference_error(json, estimate, read_any_trajectory(options.reference), options.stamp_tolerance,
-                        options.rpe_delta);
+    const RpeConfig rpe{.window = options.rpe_window == "time" ? RpeWindow::kTime : RpeWindow::kDistance,
+                        .delta = options.rpe_delta,
+                        .stamp_tolerance = options.stamp_tolerance};
+    add_reference_error(json, estimate, read_any_trajectory(options.reference), rpe);
   }
   std::fputs(options.json ? json.dump().c_str() : json.text().c_str(), stdout);
 }
@@ -55,7 +58,12 @@ void add_eval_command(CLI::App& app) {
   reference->excludes(relations);
   command->add_option("--stamp-tolerance", options->stamp_tolerance, "s: poses are matched by nearest stamp within this")
       ->capture_default_str();
-  command->add_option("--rpe-delta", options->rpe_delta, "m: RPE window in travelled distance")->capture_default_str();
+  command->add_option("--rpe-delta", options->rpe_delta, "RPE window: m of travelled distance, or s with --rpe-window time")
+      ->capture_default_str();
+  command->add_option("--rpe-window", options->rpe_window,
+                      "How the RPE window is measured: distance (KITTI) or time (Sturm et al. 2012)")
+      ->check(CLI::IsMember({"distance", "time"}))
+      ->capture_default_str();
   command->add_flag("--json", options->json, "Print a JSON summary");
   command->callback([options] { run_eval(*options); });
 }

@@ -19,13 +19,14 @@ void add_relation_error(JsonObject& json, const Trajectory& estimate, const std:
 }
 
 ReferenceError add_reference_error(JsonObject& json, const Trajectory& estimate, const Trajectory& reference,
-                         double stamp_tolerance, double rpe_delta) {
-  const AteResult ate = absolute_trajectory_error(estimate, reference, {.stamp_tolerance = stamp_tolerance});
+                                   const RpeConfig& rpe_config) {
+  const AteResult ate = absolute_trajectory_error(estimate, reference, {.stamp_tolerance = rpe_config.stamp_tolerance});
   json.add("matched", ate.matched).add("ate_rmse", ate.rmse).add("ate_mean", ate.mean);
   json.add("ate_median", ate.median).add("ate_max", ate.max);
-  const RpeResult rpe = relative_pose_error(
-      estimate, reference, {.window = RpeWindow::kDistance, .delta = rpe_delta, .stamp_tolerance = stamp_tolerance});
-  json.add("rpe_delta_m", rpe_delta).add("rpe_pairs", rpe.pairs);
+  const RpeResult rpe = relative_pose_error(estimate, reference, rpe_config);
+  if (rpe_config.window == RpeWindow::kDistance) json.add("rpe_delta_m", rpe_config.delta);
+  if (rpe_config.window == RpeWindow::kTime) json.add("rpe_delta_s", rpe_config.delta);
+  json.add("rpe_pairs", rpe.pairs);
   json.add("rpe_trans_rmse", rpe.translation.rmse).add("rpe_trans_mean", rpe.translation.mean);
   json.add("rpe_trans_max", rpe.translation.max);
   json.add("rpe_rot_rmse_deg", rpe.rotation_deg.rmse).add("rpe_rot_mean_deg", rpe.rotation_deg.mean);

@@ -23,6 +23,6 @@ struct ReferenceError {
 /// matched, ate_rmse, ate_mean, ate_median, ate_max, rpe_delta_m, rpe_pairs, rpe_trans_rmse, rpe_trans_mean,
 /// rpe_trans_max, rpe_rot_rmse_deg, rpe_rot_mean_deg, rpe_rot_max_deg.
 ReferenceError add_reference_error(JsonObject& json, const Trajectory& estimate, const Trajectory& reference,
-                         double stamp_tolerance, double rpe_delta);
+                         const RpeConfig& rpe_config);
 
 }  // namespace slam2d::cli

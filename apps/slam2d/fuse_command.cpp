@@ -21,6 +21,8 @@ struct FuseOptions {
   std::string sparse;
   std::string out;
   std::string format = "text";
+  FusionConfig fusion;
+  std::string alignment = "interpolated";
   bool json = false;
   bool quiet = false;
 };
@@ -30,7 +32,9 @@ void run_fuse(const FuseOptions& options) {
   const Trajectory dense = read_any_trajectory(options.dense);
   const Trajectory sparse = read_any_trajectory(options.sparse);
   FusionStats stats;
-  const Trajectory fused = fuse_trajectories(dense, sparse, &stats);
+  FusionConfig config = options.fusion;
+  config.alignment = options.alignment == "similarity" ? FusionAlignment::kSimilarity : FusionAlignment::kInterpolated;
+  const Trajectory fused = fuse_trajectories(dense, sparse, config, &stats);
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   write_trajectory(options.out, fused, format);
@@ -38,7 +42,7 @@ void run_fuse(const FuseOptions& options) {
   JsonObject summary;
   summary.add("dense", options.dense).add("sparse", options.sparse).add("out", options.out);
   summary.add("poses", fused.size()).add("sparse_used", stats.sparse_used).add("segments", stats.segments);
-  summary.add("rigid_segments", stats.rigid_segments).add("max_scale_change", stats.max_scale_change);
+  summary.add("blended_segments", stats.blended_segments).add("max_scale_change", stats.max_scale_change);
   if (options.json) {
     std::fputs(summary.dump().c_str(), stdout);
   } else if (!options.quiet) {
@@ -56,6 +60,15 @@ void add_fuse_command(CLI::App& app) {
   command->add_option("--sparse", options->sparse, "Sparse trajectory (slam2d text or TUM), stamps within the dense one's")
       ->required();
   command->add_option("--out", options->out, "Fused trajectory to write (one pose per dense pose)")->required();
+  command->add_option("--alignment", options->alignment,
+                      "similarity (the paper's: a similarity per segment) or interpolated (the sparse poses' rigid corrections "
+                      "interpolated; measured better)")
+      ->check(CLI::IsMember({"similarity", "interpolated"}))
+      ->capture_default_str();
+  command->add_option("--smoothing", options->fusion.correction_smoothing,
+                      "s: sigma of the Gaussian average of the sparse poses' corrections (0: through every sparse pose)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
   command->add_option("--format", options->format, "The output as slam2d text or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}));
   command->add_flag("--json", options->json, "Print a JSON summary");

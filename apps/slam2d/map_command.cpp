@@ -12,11 +12,13 @@ namespace slam2d::cli {
 void add_map_command(CLI::App& app) {
   auto options = std::make_shared<MapJobOptions>();
   auto json = std::make_shared<bool>(false);
-  CLI::App* command = app.add_subcommand("map", "Build an occupancy map and a trajectory from a CARMEN log");
+  CLI::App* command = app.add_subcommand("map", "Build an occupancy map and a trajectory from a log");
   command->add_option("log", options->log, "CARMEN log (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder")->required();
   command->add_option("--out", options->out_dir, "Output folder: map.pgm, map.yaml, map.png, trajectory.txt, summary.json")
       ->required();
-  command->add_option("--method", options->method, "Mapping method")
+  command->add_option("--method", options->method,
+                      "Mapping method; hector+graph and hector+rbpf run the 2015 chain: Hector on the laser alone as the "
+                      "odometry of graph SLAM or the particle filter on 3 scans a second, their trajectory fused into Hector's")
       ->check(CLI::IsMember(map_methods()))
       ->capture_default_str();
   command->add_option("--config", options->config,
@@ -24,7 +26,15 @@ void add_map_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   command->add_option("--resolution", options->resolution, "m per map cell (default: the method's, 0.05)");
   add_sensor_options(command, options->input);
-  command->add_flag("--no-odometry", options->no_odometry, "hector, graph: ignore the log's odometry (initial guess: the last pose or constant velocity)");
+  command->add_option("--odometry-source", options->odometry_source,
+                      "The odometry each scan carries into the method: log (the log's wheel odometry), none (hector: the last pose; "
+                      "graph: constant velocity; rbpf: as hector), hector (Hector SLAM on the laser alone, jumps "
+                      "smoothed: the 2015 pipeline), or a trajectory file (slam2d text or TUM) interpolated at each scan")
+      ->capture_default_str();
+  command->add_flag("--no-odometry", options->no_odometry, "The same as --odometry-source none");
+  command->add_option("--scan-rate", options->scan_rate,
+                      "Hz: the method sees one scan per 1/rate s (the time-based subset; a standing robot still contributes "
+                      "scans); default: every scan, and 3 Hz for the sparse method of hector+graph and hector+rbpf");
   command->add_option("--levels", options->levels, "hector: map pyramid levels (default 3)")->check(CLI::Range(1, 16));
   command->add_option("--particles", options->particles, "rbpf: number of particles (default 30)")->check(CLI::Range(1, 10000));
   command->add_option("--seed", options->seed, "rbpf: random seed (default 1; same log and seed give the same result)");

@@ -17,12 +17,17 @@ namespace slam2d::cli {
 struct MapJobOptions {
   std::string log;                  // CARMEN log (plain or .gz), ROS 1 bag, MCAP file or rosbag2 folder
   std::string out_dir;              // written: map.pgm, map.yaml, map.png, trajectory.txt, summary.json
-  std::string method = "odometry";  // odometry, hector, graph, rbpf
+  std::string method = "odometry";  // odometry, hector, graph, rbpf, hector+graph, hector+rbpf (the 2015 chain)
   std::string trajectory_format = "text";  // trajectory.txt as slam2d text or TUM (evo)
   std::string trajectory_frame = "robot";  // robot (base) | sensor: the laser's pose, T_robot_sensor of the first scan applied
   std::string mcap;                 // when set: the run for Foxglove (io/run_mcap.hpp) written there too
   std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
-  bool no_odometry = false;         // hector, graph: ignore the log's odometry (last pose / constant velocity)
+  // The odometry pose each scan carries into the method: "log" (the log's), "none" (hector: the
+  // last pose; graph: constant velocity; rbpf: as "hector"), "hector" (Hector SLAM's
+  // trajectory on the laser alone, its jumps smoothed), or a trajectory file's path.
+  std::string odometry_source = "log";
+  bool no_odometry = false;          // the same as odometry_source "none"
+  std::optional<double> scan_rate;   // Hz: the method sees at most one scan per 1/rate s (the time-based subset)
   // Overrides of the method's config (preset or defaults) when set:
   std::optional<double> resolution;      // m per cell (odometry: 0.05 when unset)
   std::optional<int> levels;             // hector: map pyramid levels, in [1, 16]

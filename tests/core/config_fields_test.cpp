@@ -38,6 +38,8 @@
 #include "slam2d/sim/odometry_model.hpp"
 #include "slam2d/sim/route_follower.hpp"
 #include "slam2d/sim/simulator.hpp"
+#include "slam2d/slam/fusion/discontinuity_smoothing.hpp"
+#include "slam2d/slam/fusion/trajectory_fusion.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/graph/keyframes.hpp"
 #include "slam2d/slam/graph/loop_closure.hpp"
@@ -199,7 +201,7 @@ using Configs = ::testing::Types<
     RouteFollowerConfig, SimulationConfig, AteConfig, RpeConfig, RelationErrorConfig, GlobalSearchConfig,
     LocalizationStatusConfig, OdometryMotionConfig, BeamModelConfig, MarkovGridConfig, EkfConfig, MclConfig, HybridConfig,
     KeyframeConfig, DriftModel, LargeClosureConfig, LoopClosureConfig, GraphSlamConfig, HectorSlamConfig,
-    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig>;
+    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig, DiscontinuitySmoothingConfig, FusionConfig>;
 TYPED_TEST_SUITE(EveryConfigTable, Configs);
 
 TYPED_TEST(EveryConfigTable, DefaultsPassAndTheirYamlReadsBack) {

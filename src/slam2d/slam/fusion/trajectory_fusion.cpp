@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <optional>
 #include <vector>
 
 #include "slam2d/core/angles.hpp"
@@ -12,7 +13,11 @@
 namespace slam2d {
 namespace {
 
-constexpr double kCoincident = 1e-6;  // m: dense end points closer than this give no scale or rotation
+// A segment whose dense end points are closer than this (m), or whose similarity would scale
+// the dense path by more than kMaxScaleChange, is not a similarity: the robot (nearly) stood, and
+// the dense path's noise would be magnified. It is blended instead (see the header).
+constexpr double kMinSpan = 0.05;
+constexpr double kMaxScaleChange = 0.5;
 
 /// A sparse pose and the dense pose at its stamp.
 struct Anchor {
@@ -40,21 +45,64 @@ Similarity rigid(const Anchor& anchor) {
   return {std::polar(1.0, T.theta()), complex_of(T)};
 }
 
-Similarity segment_similarity(const Anchor& first, const Anchor& last, bool& is_rigid) {
+/// The similarity of a segment, or nullopt where the segment is to be blended.
+std::optional<Similarity> segment_similarity(const Anchor& first, const Anchor& last) {
   const std::complex<double> dense_span = complex_of(last.dense) - complex_of(first.dense);
-  is_rigid = std::abs(dense_span) < kCoincident;
-  if (is_rigid) return rigid(first);
+  if (std::abs(dense_span) < kMinSpan) return std::nullopt;
   const std::complex<double> a = (complex_of(last.sparse) - complex_of(first.sparse)) / dense_span;
-  return {a, complex_of(first.sparse) - a * complex_of(first.dense)};
+  if (std::abs(std::abs(a) - 1.0) > kMaxScaleChange) return std::nullopt;
+  return Similarity{a, complex_of(first.sparse) - a * complex_of(first.dense)};
+}
+
+/// A blended segment's position at fraction s: the two end anchors' rigid motions, weighted.
+Eigen::Vector2d blend(const Anchor& first, const Anchor& last, double s, const Eigen::Vector2d& dense) {
+  return (1.0 - s) * rigid(first)(dense) + s * rigid(last)(dense);
 }
 
 SE2 apply(const Similarity& map, const SE2& dense, double heading_correction) {
   return SE2(map(dense.translation()), normalize_angle(dense.theta() + heading_correction));
 }
 
+/// The anchors' corrections C_k = S_k * D_k^-1 averaged with Gaussian weights in time, and each
+/// anchor's sparse pose replaced by C'_k * D_k (see the header).
+void smooth_corrections(std::vector<Anchor>& anchors, double sigma) {
+  if (sigma <= 0.0 || anchors.size() < 2) return;
+  std::vector<Eigen::Vector3d> corrections(anchors.size());
+  double previous_theta = 0.0;
+  for (std::size_t k = 0; k < anchors.size(); ++k) {
+    const SE2 C = anchors[k].sparse * anchors[k].dense.inverse();
+    const double theta = k == 0 ? C.theta() : previous_theta + normalize_angle(C.theta() - previous_theta);
+    corrections[k] = {C.x(), C.y(), theta};
+    previous_theta = theta;
+  }
+  std::vector<SE2> smoothed(anchors.size());
+  const double reach = 4.0 * sigma;
+  std::size_t low = 0;
+  std::size_t high = 0;
+  for (std::size_t k = 0; k < anchors.size(); ++k) {
+    while (anchors[low].stamp < anchors[k].stamp - reach) ++low;
+    while (high + 1 < anchors.size() && anchors[high + 1].stamp <= anchors[k].stamp + reach) ++high;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double weights = 0.0;
+    for (std::size_t j = low; j <= high; ++j) {
+      const double u = (anchors[j].stamp - anchors[k].stamp) / sigma;
+      const double w = std::exp(-0.5 * u * u);
+      sum += w * corrections[j];
+      weights += w;
+    }
+    const Eigen::Vector3d mean = sum / weights;
+    smoothed[k] = SE2(mean.x(), mean.y(), normalize_angle(mean.z())) * anchors[k].dense;
+  }
+  for (std::size_t k = 0; k < anchors.size(); ++k) anchors[k].sparse = smoothed[k];
+}
+
 }  // namespace
 
-Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& sparse_in, FusionStats* stats) {
+void validate(const FusionConfig& config) { check_fields(config, "FusionConfig"); }
+
+Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& sparse_in, const FusionConfig& config,
+                             FusionStats* stats) {
+  validate(config);
   check(!dense_in.empty(), "fuse: the dense trajectory is empty");
   check(!sparse_in.empty(), "fuse: the sparse trajectory is empty");
   const Trajectory dense = dense_in.sorted_by_stamp();
@@ -65,15 +113,15 @@ Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& spars
     if (at && (anchors.empty() || pose.stamp > anchors.back().stamp)) anchors.push_back({pose.stamp, pose.pose, *at});
   }
   check(!anchors.empty(), "fuse: no sparse pose falls within the dense trajectory's time span");
+  smooth_corrections(anchors, config.correction_smoothing);
 
   FusionStats local;
   local.sparse_used = anchors.size();
-  std::vector<Similarity> maps(anchors.size() > 1 ? anchors.size() - 1 : 0);
+  std::vector<std::optional<Similarity>> maps(anchors.size() > 1 ? anchors.size() - 1 : 0);
   for (std::size_t k = 0; k + 1 < anchors.size(); ++k) {
-    bool is_rigid = false;
-    maps[k] = segment_similarity(anchors[k], anchors[k + 1], is_rigid);
-    local.rigid_segments += is_rigid ? 1 : 0;
-    local.max_scale_change = std::max(local.max_scale_change, std::abs(std::abs(maps[k].a) - 1.0));
+    if (config.alignment == FusionAlignment::kSimilarity) maps[k] = segment_similarity(anchors[k], anchors[k + 1]);
+    if (!maps[k]) ++local.blended_segments;
+    if (maps[k]) local.max_scale_change = std::max(local.max_scale_change, std::abs(std::abs(maps[k]->a) - 1.0));
   }
   local.segments = maps.size();
 
@@ -93,7 +141,9 @@ Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& spars
       const double s = (t - first.stamp) / (last.stamp - first.stamp);
       const double correction = first.heading_correction() +
                                 s * normalize_angle(last.heading_correction() - first.heading_correction());
-      fused.push_back(t, apply(maps[k], pose.pose, correction));
+      fused.push_back(t, maps[k] ? apply(*maps[k], pose.pose, correction)
+                                 : SE2(blend(first, last, s, pose.pose.translation()),
+                                       normalize_angle(pose.pose.theta() + correction)));
     }
   }
   if (stats != nullptr) *stats = local;
