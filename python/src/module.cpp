@@ -361,7 +361,8 @@ PYBIND11_MODULE(_slam2d, m) {
   m.def(
       "map_log",
       [](const std::string& log, const std::string& method, const std::string& out_dir, const std::string& config,
-         std::optional<std::uint64_t> seed, std::optional<double> resolution, bool no_odometry, const std::string& frame) {
+         std::optional<std::uint64_t> seed, std::optional<double> resolution, bool no_odometry, const std::string& frame,
+         const std::string& odometry_source, std::optional<double> scan_rate) {
         cli::MapJobOptions options;
         options.log = log;
         options.method = method;
@@ -371,6 +372,8 @@ PYBIND11_MODULE(_slam2d, m) {
         options.resolution = resolution;
         options.no_odometry = no_odometry;
         options.trajectory_frame = frame;
+        options.odometry_source = odometry_source;
+        options.scan_rate = scan_rate;
         options.quiet = true;
         cli::MapJobResult result;
         {
@@ -385,6 +388,7 @@ PYBIND11_MODULE(_slam2d, m) {
       },
       py::arg("log"), py::arg("method"), py::arg("out_dir"), py::arg("config") = "", py::arg("seed") = py::none(),
       py::arg("resolution") = py::none(), py::arg("no_odometry") = false, py::arg("trajectory_frame") = "robot",
+      py::arg("odometry_source") = "log", py::arg("scan_rate") = py::none(),
       "Runs `slam2d map` on a log (CARMEN or bag) and writes its outputs into out_dir");
 
   m.def(

@@ -190,3 +190,23 @@ def test_localizer_is_the_command_lines_localize(tmp_path):
         np.testing.assert_allclose(localizer.trajectory, cli_rows, rtol=0, atol=1e-9, err_msg=method)
     with pytest.raises(slam2d.Error, match="EKF has no global mode"):
         slam2d.Localizer(tmp_path / "map" / "map.yaml", method="ekf")
+
+
+def test_map_log_runs_the_2015_chain_and_takes_a_trajectory_as_odometry(tmp_path):
+    cli = os.environ.get("SLAM2D_BIN", "build/release/bin/slam2d")
+    log, truth = str(tmp_path / "office.clf"), str(tmp_path / "truth.txt")
+    subprocess.run([cli, "simulate", "--quiet", "--duration", "60", "--seed", "3", "--out", log, "--truth", truth], check=True)
+    truth_rows = np.loadtxt(truth, comments="#")
+    chain = slam2d.map_log(log, method="hector+graph", out=tmp_path / "chain")
+    assert chain.trajectory.shape == truth_rows.shape  # dense: one pose per scan
+    assert chain.summary["odometry_source"] == "hector"
+    sparse = np.loadtxt(tmp_path / "chain" / "sparse_trajectory.txt", comments="#")
+    assert abs(len(sparse) - 3 * (truth_rows[-1, 0] - truth_rows[0, 0])) <= 3  # 3 scans a second
+    x0, y0, theta0 = truth_rows[0, 1:4]  # without wheel odometry the map frame is the first pose's
+    c, s = math.cos(theta0), math.sin(theta0)
+    placed = chain.trajectory[:, 1:3] @ np.array([[c, s], [-s, c]]) + [x0, y0]
+    assert np.max(np.hypot(*(placed - truth_rows[:, 1:3]).T)) < 0.5  # unaligned: the first heading error swings it
+    replayed = slam2d.map_log(log, method="odometry", odometry_source=truth, scan_rate=5.0)
+    assert abs(len(replayed.trajectory) - 5 * (truth_rows[-1, 0] - truth_rows[0, 0])) <= 5
+    at = np.searchsorted(truth_rows[:, 0], replayed.trajectory[:, 0])
+    np.testing.assert_allclose(replayed.trajectory[:, 1:3], truth_rows[at, 1:3], atol=1e-9)
