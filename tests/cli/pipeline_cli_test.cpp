@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "slam2d/eval/ate.hpp"
@@ -106,6 +108,24 @@ TEST_F(PipelineCli, HectorPlusGraphIsDenseAndNearTheTruthWithoutWheelOdometry) {
   EXPECT_LT(ate_rmse(out.file("sparse_trajectory.txt")), 0.1);
   EXPECT_EQ(json_number(result.output, "sparse_scans"), static_cast<double>(sparse.size()));
   EXPECT_NE(result.output.find("\"odometry_source\": \"hector\""), std::string::npos) << result.output;
+}
+
+TEST_F(PipelineCli, TheChainIsImmuneToWheelOdometryFaults) {
+  // Stalls and resets of the odometry (docs/faults.md) change graph SLAM's run, not the chain's.
+  TempDir out;
+  const std::string faulty = out.file("faulty.clf");
+  const CommandResult perturbed = run_command(slam2d("perturb --quiet " + log() + " --out " + faulty +
+                                                     " --fault stall:every=10,duration=2 --fault odom-reset:every=20"));
+  ASSERT_EQ(perturbed.exit_code, 0) << perturbed.errors;
+  const auto run = [&](const std::string& input, const std::string& method, const std::string& name) {
+    const CommandResult result =
+        run_command(slam2d("map --quiet " + input + " --method " + method + " --out " + out.file(name)));
+    EXPECT_EQ(result.exit_code, 0) << result.errors;
+    std::ifstream in(out.file(name) + "/trajectory.txt");
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  EXPECT_EQ(run(log(), "hector+graph", "clean"), run(faulty, "hector+graph", "faulty"));
+  EXPECT_NE(run(log(), "graph", "graph_clean"), run(faulty, "graph", "graph_faulty"));
 }
 
 TEST_F(PipelineCli, TheParticleFilterRunsWithoutWheelOdometry) {
