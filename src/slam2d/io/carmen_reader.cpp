@@ -554,7 +554,72 @@ struct CarmenReader::Impl {
   std::optional<double> previous_laser_stamp;
   double total_bytes;      // uncompressed size, negative if unknown
   double bytes_read = 0.0;  // uncompressed bytes of the lines read so far
+  // Until a line of a CARMEN type is read, the file may be something else entirely (a binary, a
+  // bag given the wrong name, a CSV): check_is_carmen() refuses it by name.
+  bool is_carmen = false;
+  std::size_t lines_before_carmen = 0;  // non-comment lines of no CARMEN type read so far
+
+  void check_is_carmen(bool comment);
 };
+
+namespace {
+
+// How many lines of other types may come before the first CARMEN line.
+constexpr std::size_t kLinesBeforeCarmen = 1000;
+
+// What a file that starts with `head` is, when its magic says so.
+std::optional<std::string> known_binary_format(std::string_view head) {
+  static const std::pair<std::string_view, std::string_view> kMagics[] = {
+      {"\x7f" "ELF", "an ELF executable"}, {"\x89PNG", "a PNG image"}, {"PK\x03\x04", "a zip archive"},
+      {"%PDF", "a PDF document"}, {"SQLite format 3", "an SQLite database (a rosbag2 .db3 file: give its folder)"},
+      {"BZh", "a bzip2 file"}, {"\x28\xb5\x2f\xfd", "a zstd file"}, {"\xfd" "7zXZ", "an xz file"},
+      {"#ROSBAG", "a ROS 1 bag"}, {"\x89MCAP", "an MCAP file"}, {"P5", "a PGM image"}};
+  for (const auto& [magic, name] : kMagics) {
+    if (head.starts_with(magic)) return std::string(name);
+  }
+  return std::nullopt;
+}
+
+// The first byte of `line` that no text log holds (a control character other than tab, CR,
+// vertical tab, form feed), if any.
+std::optional<unsigned char> binary_byte(std::string_view line) {
+  for (const char c : line) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && byte != '\t' && byte != '\r' && byte != '\v' && byte != '\f') || byte == 0x7F) return byte;
+  }
+  return std::nullopt;
+}
+
+bool is_carmen_type(std::string_view type) {
+  return type == "FLASER" || type == "RLASER" || type == "ROBOTLASER1" || type == "ODOM" || type == "TRUEPOS" ||
+         type == "PARAM" || type.starts_with("RAWLASER");
+}
+
+}  // namespace
+
+// Called for each line (comments too) until the first CARMEN line: a file that is something else
+// is refused at the first sign of it, naming what it is where its magic says so.
+void CarmenReader::Impl::check_is_carmen(bool comment) {
+  const std::string not_carmen = "not a CARMEN log: ";
+  if (reader.line_number() == 1) {
+    if (const auto format = known_binary_format(line)) throw ParseError(reader.path(), 1, not_carmen + "it is " + *format);
+  }
+  if (const auto byte = binary_byte(line)) {
+    throw ParseError(reader.path(), reader.line_number(),
+                     not_carmen + fmt::format("binary data (byte 0x{:02x}) before any FLASER, RLASER, ROBOTLASER1, "
+                                              "RAWLASER, ODOM, TRUEPOS or PARAM line",
+                                              *byte));
+  }
+  if (comment) return;
+  if (is_carmen_type(tokens[0])) {
+    is_carmen = true;
+  } else if (++lines_before_carmen >= kLinesBeforeCarmen) {
+    throw ParseError(reader.path(), reader.line_number(),
+                     not_carmen + fmt::format("no FLASER, RLASER, ROBOTLASER1, RAWLASER, ODOM, TRUEPOS or PARAM line "
+                                              "in the first {} lines",
+                                              kLinesBeforeCarmen));
+  }
+}
 
 std::optional<SensorMessage> CarmenReader::Impl::parse_line(const Fields& fields) {
   const std::string_view type = fields.type();
@@ -771,7 +836,9 @@ std::optional<SensorMessage> CarmenReader::next() {
     ++s.stats.lines;
     s.bytes_read += static_cast<double>(s.line.size() + 1);
     split_fields(s.line, s.tokens);
-    if (s.tokens.empty() || s.tokens[0].front() == '#') {
+    const bool comment = s.tokens.empty() || s.tokens[0].front() == '#';
+    if (!s.is_carmen) s.check_is_carmen(comment);
+    if (comment) {
       ++s.stats.comment_lines;
       continue;
     }
@@ -794,6 +861,10 @@ std::optional<SensorMessage> CarmenReader::next() {
       s.note_stamp(std::get<TruePoseMessage>(*message).stamp, false);
     }
     return message;
+  }
+  if (!s.is_carmen && s.lines_before_carmen > 0) {
+    throw ParseError(s.reader.path(), s.reader.line_number(),
+                     "not a CARMEN log: no FLASER, RLASER, ROBOTLASER1, RAWLASER, ODOM, TRUEPOS or PARAM line");
   }
   return std::nullopt;
 }
