@@ -11,7 +11,7 @@ DEMO_OUT ?= out/demo
 SLAM2D_DATA ?= $(abspath $(wildcard ../shared/data))
 export SLAM2D_DATA
 
-.PHONY: all deps configure build test demo bench install clean
+.PHONY: all deps configure build test demo bench install clean fuzz-build fuzz fuzz-smoke check-sanitizers
 
 all: build
 
@@ -31,6 +31,35 @@ test: build
 demo: configure
 	@cmake --build $(BUILD_DIR) -j$(JOBS) --target slam2d
 	@$(BUILD_DIR)/bin/slam2d demo --out $(DEMO_OUT)
+
+# Reliability (docs/reliability.md). The fuzz targets: a clang build with libFuzzer, ASan and UBSan
+# of the parsers; `make fuzz` runs each for FUZZ_SECONDS over corpora seeded from the real data,
+# `make fuzz-smoke` (CI) for 10 s each.
+FUZZ_DIR ?= build/fuzz
+FUZZ_SECONDS ?= 600
+fuzz-build: deps
+	@CXX=clang++ cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLAM2D_FUZZ=ON -DSLAM2D_BUILD_TESTS=OFF \
+	  -DSLAM2D_BUILD_BENCH=OFF -DSLAM2D_BUILD_PYTHON=OFF -DSLAM2D_BUILD_CLI=OFF -DSLAM2D_INSTALL=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(FUZZ_DIR) -j$(JOBS) --target fuzz_all
+
+# The seed corpora use the release build's CLI (simulated logs and bags).
+fuzz: build fuzz-build
+	@SLAM2D_BIN=$(abspath $(BUILD_DIR))/bin/slam2d bash fuzz/run.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
+
+fuzz-smoke:
+	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=10
+
+# The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer, and the multi-threaded
+# code (the RBPF's particles, the ROS 1 bag reader's decompression) under ThreadSanitizer.
+SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSLAM2D_BUILD_BENCH=OFF -DSLAM2D_BUILD_PYTHON=OFF $(CMAKE_FLAGS)
+check-sanitizers: deps
+	@cmake -S . -B build/asan -DSLAM2D_SANITIZE=address,undefined $(SANITIZE_FLAGS) >/dev/null
+	@cmake --build build/asan -j$(JOBS)
+	@cd build/asan && ctest --output-on-failure -j$(JOBS)
+	@cmake -S . -B build/tsan -DSLAM2D_SANITIZE=thread $(SANITIZE_FLAGS) >/dev/null
+	@cmake --build build/tsan -j$(JOBS) --target slam2d_test_slam slam2d_test_io
+	@TSAN_OPTIONS=halt_on_error=1 build/tsan/tests/slam2d_test_slam --gtest_filter='*Parallel*:*Thread*'
+	@TSAN_OPTIONS=halt_on_error=1 build/tsan/tests/slam2d_test_io --gtest_filter='Ros1Bag*'
 
 bench: build
 	@$(BUILD_DIR)/bin/slam2d_bench

@@ -24,6 +24,7 @@
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/io/config_file.hpp"
 #include "slam2d/io/config_text.hpp"
+#include "slam2d/io/input_limits.hpp"
 #include "slam2d/localization/ekf.hpp"
 #include "slam2d/localization/global_search.hpp"
 #include "slam2d/localization/hybrid.hpp"
@@ -201,7 +202,7 @@ using Configs = ::testing::Types<
     RouteFollowerConfig, SimulationConfig, AteConfig, RpeConfig, RelationErrorConfig, GlobalSearchConfig,
     LocalizationStatusConfig, OdometryMotionConfig, BeamModelConfig, MarkovGridConfig, EkfConfig, MclConfig, HybridConfig,
     KeyframeConfig, DriftModel, LargeClosureConfig, LoopClosureConfig, GraphSlamConfig, HectorSlamConfig,
-    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig, DiscontinuitySmoothingConfig, FusionConfig>;
+    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig, DiscontinuitySmoothingConfig, FusionConfig, InputLimits>;
 TYPED_TEST_SUITE(EveryConfigTable, Configs);
 
 TYPED_TEST(EveryConfigTable, DefaultsPassAndTheirYamlReadsBack) {

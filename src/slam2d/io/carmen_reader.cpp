@@ -53,6 +53,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/odometry_repair.hpp"
 #include "slam2d/io/carmen.hpp"
+#include "slam2d/io/input_limits.hpp"
 #include "slam2d/io/detail/number_format.hpp"
 #include "slam2d/io/detail/text_input.hpp"
 
@@ -93,6 +94,16 @@ class Fields {
     const std::string problem = number_problem(tokens_[i], value);
     if (!problem.empty()) fail(std::string(name) + " " + problem);
     return *value;
+  }
+
+  /// A count of beams: a count within max_beams.
+  std::size_t beams(std::size_t i, std::string_view name) const {
+    const std::size_t n = count(i, name);
+    if (n > input_limits().max_beams) {
+      fail(std::string(name) + " " + std::to_string(n) + " is over max_beams (" + std::to_string(input_limits().max_beams) +
+           "; " + limit_hint("max_beams") + ")");
+    }
+    return n;
   }
 
   /// A count (a non-negative integer).
@@ -658,7 +669,7 @@ void CarmenReader::Impl::parse_param(const Fields& fields) {
 // FLASER|RLASER n r_1 .. r_n x y theta odom_x odom_y odom_theta ipc_timestamp [host [logger_ts]]
 LaserMessage CarmenReader::Impl::parse_old_laser(const Fields& fields, bool is_rear) {
   if (fields.size() < 2) fields.fail("missing num_readings");
-  const std::size_t n = fields.count(1, "num_readings");
+  const std::size_t n = fields.beams(1, "num_readings");
   const std::size_t available = fields.size() - 2;
   if (available < n || !tail_fits(available - n, 6)) {
     fields.fail("expected " + std::to_string(n) + " ranges + 9 fields, got " + std::to_string(available) +
@@ -746,10 +757,10 @@ std::pair<std::size_t, std::size_t> CarmenReader::Impl::new_laser_counts(const F
   if (fields.size() < 10) {
     fields.fail("expected 7 fields and num_readings, got " + std::to_string(fields.size() - 1) + " tokens");
   }
-  const std::size_t n = fields.count(8, "num_readings");
+  const std::size_t n = fields.beams(8, "num_readings");
   const std::size_t available = fields.size() - 9;  // tokens after num_readings
   const bool has_m = available > n;
-  const std::size_t m = has_m ? fields.count(9 + n, "num_remissions") : 0;
+  const std::size_t m = has_m ? fields.beams(9 + n, "num_remissions") : 0;
   if (!has_m || available - n - 1 < m || !tail_fits(available - n - 1 - m, fixed_tail)) {
     fields.fail("expected " + std::to_string(n) + " ranges + num_remissions + " +
                 (has_m ? std::to_string(m) : std::string("?")) + " remissions + " +

@@ -23,6 +23,7 @@
 #include <cerrno>
 #include <cmath>
 #include <csetjmp>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -34,12 +35,12 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/atomic_file.hpp"
 #include "slam2d/io/detail/number_format.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d {
 
 namespace {
 
-constexpr long long kMaxPixels = 1LL << 28;  // refuse larger images (and garbage sizes)
 
 std::vector<std::uint8_t> read_file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -143,7 +144,7 @@ GrayImage decode_pgm(const std::vector<std::uint8_t>& bytes, const std::string& 
   PgmTokens tokens(bytes, path);
   const long long width = tokens.next_number("width");
   const long long height = tokens.next_number("height");
-  if (width <= 0 || height <= 0 || width * height > kMaxPixels) {
+  if (width <= 0 || height <= 0 || static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) > input_limits().max_map_cells) {
     throw ParseError(path, tokens.line(), "PGM: invalid size " + std::to_string(width) + " x " + std::to_string(height));
   }
   const long long maxval = tokens.next_number("maxval");
@@ -198,7 +199,7 @@ bool png_decode(png_structp png, png_infop info, const PngSource& source, PngRas
   png_read_info(png, info);
   const png_uint_32 width = png_get_image_width(png, info);
   const png_uint_32 height = png_get_image_height(png, info);
-  if (static_cast<long long>(width) * height > kMaxPixels) png_error(png, "image too large");
+  if (static_cast<std::uint64_t>(width) * height > input_limits().max_map_cells) png_error(png, "image too large");
   const int colour_type = png_get_color_type(png, info);
   if (png_get_bit_depth(png, info) == 16) png_set_scale_16(png);
   if (colour_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);

@@ -24,8 +24,6 @@ namespace {
 using mcap::kMagic;
 constexpr std::uint64_t kRecordPrefix = 9;  // opcode (1) + content length (8)
 constexpr std::uint64_t kFooterRecord = kRecordPrefix + 20;
-constexpr std::uint64_t kMaxUncompressed = std::uint64_t{1} << 30;  // 1 GiB
-constexpr std::uint64_t kMaxRatio = 1000;                           // uncompressed / compressed
 
 // The opcodes the reader handles, as the bytes it compares.
 constexpr std::uint8_t kFooter = static_cast<std::uint8_t>(mcap::Opcode::kFooter);
@@ -125,10 +123,6 @@ std::vector<std::uint8_t> decompress(const std::string& compression, const std::
       throw Malformed("uncompressed chunk of " + std::to_string(size) + " bytes says " + std::to_string(uncompressed));
     }
     return std::vector<std::uint8_t>(data, data + size);
-  }
-  if (uncompressed > kMaxUncompressed || uncompressed > kMaxRatio * std::max<std::uint64_t>(size, 1)) {
-    throw Malformed("implausible uncompressed size " + std::to_string(uncompressed) + " for " + std::to_string(size) +
-                    " compressed bytes");
   }
   try {
     return detail::decompress(compression == "lz4" ? detail::Codec::kLz4Frame : detail::Codec::kZstd, {data, size},
@@ -499,7 +493,7 @@ class McapSource final : public BagSource {
       const auto schema = schema_names_.find(channel.schema_id);
       const std::string type = schema == schema_names_.end() ? std::string() : schema->second;
       const auto same = std::find_if(topics_.begin(), topics_.end(),
-                                     [&](const BagTopic& topic) { return topic.name == channel.topic_name; });
+                                     [&name = channel.topic_name](const BagTopic& topic) { return topic.name == name; });
       channel.topic = static_cast<std::size_t>(same - topics_.begin());
       if (same == topics_.end()) topics_.push_back(BagTopic{channel.topic_name, type, 0, 0.0, 0.0});
     }

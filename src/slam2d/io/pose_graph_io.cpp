@@ -15,6 +15,7 @@
 #include "slam2d/io/atomic_file.hpp"
 #include "slam2d/io/detail/number_format.hpp"
 #include "slam2d/io/detail/text_input.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d {
 
@@ -107,6 +108,11 @@ class GraphFileReader {
  private:
   void read_line(const std::vector<std::string_view>& fields) {
     const auto [tag, spec] = classify(fields[0]);
+    if ((tag == Tag::kVertex || tag == Tag::kEdge) &&
+        graph_.vertices.size() + graph_.edges.size() >= input_limits().max_graph_elements) {
+      reader_.fail("more than " + std::to_string(input_limits().max_graph_elements) +
+                   " vertices and edges (max_graph_elements; " + limit_hint("max_graph_elements") + ")");
+    }
     switch (tag) {
       case Tag::kVertex:
         settle_format(*spec, fields[0]);

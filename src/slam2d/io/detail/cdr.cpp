@@ -12,6 +12,7 @@
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
 #include "slam2d/io/detail/ros_time.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d::detail {
 namespace {
@@ -138,6 +139,7 @@ DecodedScan read_laser_scan(CdrReader& in) {
   scan.range_min = in.read<float>();
   scan.range_max = in.read<float>();
   scan.ranges.resize(in.sequence(sizeof(float), "ranges"));
+  check_beam_count(scan.ranges.size());
   for (double& range : scan.ranges) range = in.read<float>();
   scan.intensities.resize(in.sequence(sizeof(float), "intensities"));
   for (double& intensity : scan.intensities) intensity = in.read<float>();

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/detail/compression.hpp"
 
+#include <algorithm>
 #include <bzlib.h>
 #include <lz4frame.h>
 #include <zstd.h>
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d::detail {
 namespace {
@@ -106,6 +108,16 @@ std::vector<std::uint8_t> compress(Codec codec, std::span<const std::uint8_t> da
 }
 
 std::vector<std::uint8_t> decompress(Codec codec, std::span<const std::uint8_t> data, std::size_t size) {
+  // A chunk declares its inflated size, and that much is allocated: a hostile declaration (or a
+  // real bomb) is refused before.
+  const InputLimits& limits = input_limits();
+  if (codec != Codec::kNone &&
+      (size > limits.max_decompressed_bytes || size / std::max<std::size_t>(data.size(), 1) >= limits.max_compression_ratio)) {
+    throw Error("a compressed block of " + std::to_string(data.size()) + " bytes declares " + std::to_string(size) +
+                " bytes inflated: over max_decompressed_bytes (" + std::to_string(limits.max_decompressed_bytes) +
+                ") or max_compression_ratio (" + std::to_string(limits.max_compression_ratio) + "); a decompression bomb? " +
+                limit_hint("max_decompressed_bytes"));
+  }
   switch (codec) {
     case Codec::kNone:
       if (data.size() != size) throw Error("uncompressed data of " + std::to_string(data.size()) + " bytes, not " + std::to_string(size));

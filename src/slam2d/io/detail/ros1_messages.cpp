@@ -9,6 +9,7 @@
 
 #include "slam2d/io/detail/ros_quaternion.hpp"
 #include "slam2d/io/detail/ros_time.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d::ros1 {
 
@@ -72,6 +73,7 @@ DecodedScan read_laser_scan(WireReader& reader) {
   scan.range_min = reader.f32();
   scan.range_max = reader.f32();
   scan.ranges = read_float32_array(reader);
+  check_beam_count(scan.ranges.size());
   scan.intensities = read_float32_array(reader);
   return out;
 }

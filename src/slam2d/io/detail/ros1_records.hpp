@@ -67,10 +67,6 @@ struct RecordLayout {
 RecordLayout record_layout(std::uint64_t pos, std::uint64_t size, std::uint32_t header_len,
                            std::uint32_t data_len);
 
-/// The largest uncompressed chunk accepted: 1 GiB, and at most 1000 times its compressed size.
-inline constexpr std::uint64_t kMaxChunkSize = std::uint64_t{1} << 30;
-inline constexpr std::uint64_t kMaxCompressionRatio = 1000;
-
 /// A chunk's records, uncompressed: `compression` is "none", "bz2" or "lz4"; `size` the
 /// uncompressed size from the chunk header. Throws Error for another compression, a size out of
 /// bounds, corrupt data or data whose size differs from `size`.

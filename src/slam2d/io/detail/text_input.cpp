@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/detail/text_input.hpp"
 
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <filesystem>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/io/input_limits.hpp"
 
 namespace slam2d {
 
@@ -48,6 +50,11 @@ bool LineReader::next(std::string& line) {
       break;
     }
     line.append(buffer, n);
+    if (line.size() > input_limits().max_line_bytes) {
+      ++line_number_;
+      fail("a line longer than " + std::to_string(input_limits().max_line_bytes) + " bytes (max_line_bytes; " +
+           limit_hint("max_line_bytes") + ")");
+    }
   }
   int error = Z_OK;
   const char* message = gzerror(file, &error);
