@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libsuitesparse-dev libyaml-cpp-dev
   libcli11-dev libfmt-dev zlib1g-dev libbz2-dev liblz4-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev libzstd-dev libsqlite3-dev
+  clang libclang-rt-14-dev
   python3 python3-dev python3-pybind11 python3-numpy python3-pytest python3-yaml python3-distributed python3-matplotlib
 )
 

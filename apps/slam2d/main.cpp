@@ -7,6 +7,7 @@
 #include <exception>
 
 #include "commands.hpp"
+#include "interrupt.hpp"
 #include "slam2d/core/error.hpp"
 
 int main(int argc, char** argv) {
@@ -26,10 +27,14 @@ int main(int argc, char** argv) {
   slam2d::cli::add_config_command(app);
   slam2d::cli::add_convert_command(app);
   slam2d::cli::add_fuse_command(app);
+  slam2d::cli::install_interrupt_handler();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const slam2d::cli::Interrupted& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 130;
   } catch (const slam2d::Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;

@@ -5,6 +5,8 @@
 
 #include <cstdio>
 
+#include "interrupt.hpp"
+
 namespace slam2d::cli {
 
 Progress::Progress(std::string label, bool quiet)
@@ -16,6 +18,7 @@ Progress::Progress(std::string label, bool quiet)
 Progress::~Progress() { finish(); }
 
 void Progress::update(double fraction, const std::string& detail) {
+  check_interrupted(label_);
   if (!enabled_) return;
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();

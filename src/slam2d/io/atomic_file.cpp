@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/atomic_file.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <vector>
 
 #include "slam2d/core/error.hpp"
@@ -53,6 +55,25 @@ void gzip_file(const std::string& from, const std::string& to, const std::string
 
 }  // namespace
 
+void sync_to_disk(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(path + ": cannot open to sync: " + std::strerror(errno));
+  const int result = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  // A file system that cannot sync a directory (EINVAL) gives no stronger promise to keep.
+  if (result != 0 && error != EINVAL) throw Error(path + ": cannot sync to disk: " + std::strerror(error));
+}
+
+void rename_durably(const std::string& from, const std::string& to) {
+  sync_to_disk(from);
+  if (std::rename(from.c_str(), to.c_str()) != 0) {
+    throw Error(to + ": cannot rename temporary file: " + std::strerror(errno));
+  }
+  const std::filesystem::path parent = std::filesystem::path(to).parent_path();
+  sync_to_disk(parent.empty() ? std::string(".") : parent.string());
+}
+
 bool has_gzip_extension(std::string_view path) { return path.size() > 3 && path.ends_with(".gz"); }
 
 AtomicFile::AtomicFile(std::string path, bool gzip)
@@ -88,9 +109,7 @@ void AtomicFile::commit() {
     std::remove(temp_path_.c_str());
     temp_path_ = final_temp;
   }
-  if (std::rename(final_temp.c_str(), path_.c_str()) != 0) {
-    throw Error(path_ + ": cannot rename temporary file: " + std::strerror(errno));
-  }
+  rename_durably(final_temp, path_);
   committed_ = true;
 }
 

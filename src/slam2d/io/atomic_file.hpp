@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Atomic output: everything is written to a temporary file beside the target and renamed over
-// it on commit(), so a failed run never leaves a half-written file.
+// it on commit(), so a failed run never leaves a half-written file. The file is synced to disk
+// before the rename and its folder after it, so that a crash or a power cut at any moment leaves
+// the previous file or the new one, never an empty or partial one (ext4's delayed allocation
+// otherwise may commit the rename before the data).
 
 #include <cstdint>
 #include <fstream>
@@ -32,6 +35,12 @@ class AtomicFile {
   bool committed_ = false;
   std::ofstream stream_;
 };
+
+/// fsync of a file or a folder; Error naming it when that fails.
+void sync_to_disk(const std::string& path);
+/// Renames `from` (a finished file or folder) to `to` so that it survives a crash: `from` is
+/// synced first, the folder holding `to` after.
+void rename_durably(const std::string& from, const std::string& to);
 
 /// True when the path ends in ".gz".
 bool has_gzip_extension(std::string_view path);

@@ -88,8 +88,7 @@ class Rosbag2Sink final : public BagSink {
     fs::remove_all(old, error);
     if (fs::exists(folder_, error)) fs::rename(folder_, old, error);
     if (error) throw Error(folder_.string() + ": cannot replace: " + error.message());
-    fs::rename(staging_, folder_, error);
-    if (error) throw Error(folder_.string() + ": cannot rename " + staging_.string() + " into place: " + error.message());
+    rename_durably(staging_.string(), folder_.string());  // the staging folder's entries synced, then the parent's
     committed_ = true;
     fs::remove_all(old, error);
   }
