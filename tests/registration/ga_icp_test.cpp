@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <numbers>
 
@@ -50,16 +51,17 @@ TEST(GaIcpChromosome, DecodesHandComputedOffsets) {
 }
 
 TEST(GaIcpRangeDifference, HandComputedErrors) {
-  // The source sees an arc at 2 m on 5 beams 0.1 rad apart (the middle one dropped).
+  // The source sees an arc at 2 m on 5 beams 0.1 rad apart (the middle one dropped): 4 readings.
   PointCloud2 source = arc(2.0, -0.2, 0.1, 5);
   source.points.erase(source.points.begin() + 2);
-  const RangeDifferenceMetric metric(source, {.max_range_difference = 0.5, .min_overlap = 0.5});
+  const RangeDifferenceMetric metric(source, {.max_range_difference = 0.5, .min_matching_index = 0.5});
   EXPECT_EQ(metric.beams(), 5u);
   EXPECT_NEAR(metric.angular_resolution(), 0.1, 1e-12);
-  // The same target at 2.1 m: every source beam differs by 0.1 m.
+  // The same target at 2.1 m: every reading matches, 0.1 m off: I = 1, e = 0.01.
   const RangeDifferenceScore same = metric.score(arc(2.1, -0.2, 0.1, 5), SE2());
-  EXPECT_EQ(same.overlapping_beams, 4u);
-  EXPECT_DOUBLE_EQ(same.overlap, 1.0);
+  EXPECT_EQ(same.matched_readings, 4u);
+  EXPECT_DOUBLE_EQ(same.matching_index, 1.0);
+  EXPECT_NEAR(same.matched_rms, 0.1, 1e-12);
   EXPECT_NEAR(same.error, 0.01, 1e-12);
   // Seen from a source pose 0.3 m ahead: ranges shrink; on the central beams by ~0.3.
   const PointCloud2 ahead = arc(2.0, -0.2, 0.1, 5);
@@ -70,29 +72,45 @@ TEST(GaIcpRangeDifference, HandComputedErrors) {
     const double bearing = std::atan2(p.y(), p.x());
     const long beam = std::lround((bearing + 0.2) / 0.1);
     if (beam == 2 || beam < 0 || beam > 4) continue;
-    expected += std::pow(std::min(0.5, std::abs(2.0 - p.norm())), 2);
+    expected += std::pow(2.0 - p.norm(), 2);  // all within E_max = 0.5
   }
   const RangeDifferenceScore moved = metric.score(ahead, T);
-  EXPECT_EQ(moved.overlapping_beams, 4u);  // points move outward in bearing but stay within 5 beams
+  EXPECT_EQ(moved.matched_readings, 4u);  // points move outward in bearing but stay within 5 beams
   EXPECT_NEAR(moved.error, expected / 4.0, 1e-12);
-  // Clipped at c: a 1 m difference counts as 0.25 m^2.
-  EXPECT_NEAR(metric.score(arc(3.0, -0.2, 0.1, 5), SE2()).error, 0.25, 1e-12);
-  // Overlap criterion: a target covering 2 of the 4 source readings passes at 0.5 ...
+  // A 1 m difference does not match: I = 0, infeasible.
+  const RangeDifferenceScore far = metric.score(arc(3.0, -0.2, 0.1, 5), SE2());
+  EXPECT_EQ(far.matched_readings, 0u);
+  EXPECT_EQ(far.error, std::numeric_limits<double>::infinity());
+  // Matching index: a target covering 2 of the 4 readings, exactly: I = 0.5, e = 0.5 * 0 + 0.5 * 0.25.
   const RangeDifferenceScore half = metric.score(arc(2.0, -0.2, 0.1, 2), SE2());
-  EXPECT_DOUBLE_EQ(half.overlap, 0.5);
-  EXPECT_NEAR(half.error, 0.0, 1e-12);
-  // ... one of 4 does not.
+  EXPECT_DOUBLE_EQ(half.matching_index, 0.5);
+  EXPECT_NEAR(half.error, 0.125, 1e-12);
+  // ... so the pose explaining every reading 0.1 m off beats the one explaining half of them
+  // exactly (a mean over the overlapping beams alone, 0 against 0.01, would pick the latter).
+  EXPECT_LT(same.error, half.error);
+  // Half a reading's worth more matched (3 of 4, one 0.4 m off, one beyond E_max): I = 0.75.
+  PointCloud2 mixed = arc(2.0, -0.2, 0.1, 5);
+  mixed.points[3] *= 2.4 / 2.0;
+  mixed.points[4] *= 2.6 / 2.0;
+  const RangeDifferenceScore partial = metric.score(mixed, SE2());
+  EXPECT_EQ(partial.matched_readings, 3u);
+  EXPECT_NEAR(partial.error, 0.75 * (0.16 / 3.0) + 0.25 * 0.25, 1e-12);
+  EXPECT_NEAR(partial.matched_rms, std::sqrt(0.16 / 3.0), 1e-12);
+  // One of 4 is below the feasibility bound.
   EXPECT_EQ(metric.score(arc(2.0, -0.2, 0.1, 1), SE2()).error, std::numeric_limits<double>::infinity());
   // Nothing in the field of view.
-  EXPECT_EQ(metric.score(arc(2.0, 2.0, 0.1, 5), SE2()).overlapping_beams, 0u);
+  EXPECT_EQ(metric.score(arc(2.0, 2.0, 0.1, 5), SE2()).matched_readings, 0u);
 }
 
 TEST(GaIcpRangeDifference, MinimalAtTheTruthOnSimulatedScans) {
   const auto pair = make_scan_pair(testing::office_world());
   const RangeDifferenceMetric metric(pair.source, {});
   EXPECT_NEAR(metric.angular_resolution(), pair.source_scan.angle_increment, 1e-9);
-  const double at_truth = metric.score(pair.target, pair.T_target_source).error;
-  EXPECT_LT(at_truth, 0.01);
+  const RangeDifferenceScore truth = metric.score(pair.target, pair.T_target_source);
+  EXPECT_GT(truth.matching_index, 0.9);  // the rest: what the target does not see
+  EXPECT_LT(truth.matched_rms, 0.05);
+  const double at_truth = truth.error;
+  EXPECT_LT(at_truth, 0.25 * (1.0 - truth.matching_index) + 0.0025);
   for (const SE2& error : {SE2(0.1, 0, 0), SE2(0, 0.1, 0), SE2(0, 0, 0.05), SE2(-0.2, 0.1, -0.1)}) {
     EXPECT_GT(metric.score(pair.target, pair.T_target_source * error).error, at_truth) << error;
   }
@@ -123,6 +141,48 @@ TEST(GaIcp, RecoversALargeOffsetWherePlainIcpFails) {
     EXPECT_TRUE(test::poses_near(inverse.T_target_source, inverse_truth, kTranslationTolerance, kAngleTolerance))
         << world->name << ": " << inverse.T_target_source << " vs " << inverse_truth;
   }
+}
+
+// Something the source sees and the target does not (a person who walked in): on `beams`
+// consecutive beams from `first`, the source's readings `nearer` metres short of the wall.
+PointCloud2 with_object(PointCloud2 source, std::size_t first, std::size_t beams, double nearer) {
+  for (std::size_t i = first; i < first + beams && i < source.size(); ++i) {
+    Point2& p = source.points[i];
+    p *= (p.norm() - nearer) / p.norm();
+  }
+  return source;
+}
+
+TEST(GaIcp, TheReducedGateKeepsWhatOnlyOneScanSeesOutOfIcp) {
+  const GaIcpConfig reduced{};
+  GaIcpConfig fixed = reduced;
+  fixed.icp_gate_factor = 0.0;  // ICP alone's 1 m gate after the GA
+  int reduced_better = 0;
+  for (const auto& [world, options] :
+       {std::pair{&testing::office_world(),
+                  testing::ScanPairOptions{.T_world_target = kOfficeRoomS1, .T_target_source = SE2(0.15, -0.05, 0.05)}},
+        std::pair{&testing::room_world(),
+                  testing::ScanPairOptions{.T_world_target = SE2(-0.5, 0.3, 0.2), .T_target_source = SE2(0.2, 0.1, -0.1)}}}) {
+    const auto pair = make_scan_pair(*world, options);
+    const SE2& truth = pair.T_target_source;
+    for (const std::size_t first : {30u, 80u, 120u}) {
+      const PointCloud2 source = with_object(pair.source, first, 20, 0.7);
+      const SE2 guess = truth * SE2(0.1, -0.1, 0.05);
+      const GaSearchResult search = ga_search(pair.target, source, guess, reduced);
+      const double gate = icp_gate(search, reduced);
+      EXPECT_LT(gate, 0.5) << world->name << " beam " << first;
+      EXPECT_GE(gate, reduced.icp_min_correspondence_distance);
+      const MatchResult with_reduced = match_ga_icp(pair.target, source, guess, reduced);
+      const MatchResult with_fixed = match_ga_icp(pair.target, source, guess, fixed);
+      const auto error = [&](const MatchResult& r) { return (truth.inverse() * r.T_target_source).translation().norm(); };
+      EXPECT_TRUE(test::poses_near(with_reduced.T_target_source, truth, kTranslationTolerance, kAngleTolerance))
+          << world->name << " beam " << first << ": " << with_reduced.T_target_source << " vs " << truth;
+      std::cout << world->name << " beam " << first << ": gate " << gate << " m, error " << error(with_reduced)
+                << " m reduced, " << error(with_fixed) << " m with the 1 m gate\n";
+      if (error(with_reduced) + 0.01 < error(with_fixed)) ++reduced_better;
+    }
+  }
+  EXPECT_GE(reduced_better, 4);  // the 1 m gate lets the object pull ICP off, by more than 1 cm
 }
 
 TEST(GaIcp, FillsTheWholeResult) {
@@ -197,7 +257,9 @@ TEST(GaIcp, InvalidConfigsThrow) {
       {.elite = 40},
       {.tournament_size = 0},
       {.max_range_difference = 0.0},
-      {.min_overlap = 1.1},
+      {.min_matching_index = 1.1},
+      {.icp_gate_factor = -1.0},
+      {.icp_min_correspondence_distance = 0.0},
       {.angular_resolution = -0.01},
       {.icp_max_iterations = 0},
       {.icp_max_correspondence_distance = std::numeric_limits<double>::quiet_NaN()},

@@ -148,7 +148,7 @@ Eigen::Vector3d decode_chromosome(std::uint64_t chromosome, const GaIcpConfig& c
 }
 
 RangeDifferenceMetric::RangeDifferenceMetric(const PointCloud2& source, const GaIcpConfig& config)
-    : max_range_difference_(config.max_range_difference), min_overlap_(config.min_overlap) {
+    : max_range_difference_(config.max_range_difference), min_matching_index_(config.min_matching_index) {
   std::vector<double> bearings, ranges;
   for (const Point2& p : source.points) {
     if (p.norm() <= 0.0) continue;
@@ -193,17 +193,19 @@ RangeDifferenceScore RangeDifferenceMetric::score(const PointCloud2& target, con
     const std::size_t beam = beam_of(std::atan2(p.y(), p.x()));
     if (beam < projected.size()) projected[beam] = std::min(projected[beam], p.norm());
   }
-  const double clip = max_range_difference_ * max_range_difference_;
-  double sum = 0.0;
+  double sum = 0.0;  // of the matched readings' squared differences
   for (std::size_t k = 0; k < ranges_.size(); ++k) {
-    if (ranges_[k] == 0.0 || !std::isfinite(projected[k])) continue;
+    if (ranges_[k] == 0.0 || !(std::abs(ranges_[k] - projected[k]) <= max_range_difference_)) continue;
     const double difference = ranges_[k] - projected[k];
-    sum += std::min(difference * difference, clip);  // Eq. (2)
-    ++score.overlapping_beams;
+    sum += difference * difference;
+    ++score.matched_readings;
   }
-  score.overlap = static_cast<double>(score.overlapping_beams) / static_cast<double>(readings_);
-  if (score.overlapping_beams > 0 && score.overlap >= min_overlap_) {  // Eq. (3)
-    score.error = sum / static_cast<double>(score.overlapping_beams);
+  const auto matched = static_cast<double>(score.matched_readings);
+  score.matching_index = matched / static_cast<double>(readings_);
+  if (score.matched_readings > 0) score.matched_rms = std::sqrt(sum / matched);
+  if (score.matched_readings > 0 && score.matching_index >= min_matching_index_) {  // Eq. (3)
+    const double I = score.matching_index;
+    score.error = I * (sum / matched) + (1.0 - I) * max_range_difference_ * max_range_difference_;  // Eq. (2)
   }
   return score;
 }
@@ -229,13 +231,20 @@ GaSearchResult ga_search(const PointCloud2& target, const PointCloud2& source, c
   return result;
 }
 
+double icp_gate(const GaSearchResult& search, const GaIcpConfig& config) {
+  const double upper = config.icp_max_correspondence_distance;
+  if (!std::isfinite(search.score.error) || config.icp_gate_factor == 0.0) return upper;
+  return std::clamp(config.icp_gate_factor * search.score.matched_rms, std::min(config.icp_min_correspondence_distance, upper),
+                    upper);  // Eq. (4)
+}
+
 MatchResult match_ga_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                          const GaIcpConfig& config) {
   validate(config);
   if (target.size() < kMinCloudPoints || source.size() < kMinCloudPoints) return failed_match(T_target_source_guess);
   const GaSearchResult search = ga_search(target, source, T_target_source_guess, config);  // the GA stage
   const IcpConfig icp{.max_iterations = config.icp_max_iterations,
-                      .max_correspondence_distance = config.icp_max_correspondence_distance,
+                      .max_correspondence_distance = icp_gate(search, config),
                       .min_correspondences = config.icp_min_correspondences};
   MatchResult result = match_icp(target, source, search.T_target_source, icp);  // the ICP stage
   result.iterations += search.generations;

@@ -9,17 +9,26 @@
 //   - chromosome: three binary genes, the offsets (dx, dy, dtheta) added to the guess's
 //     coordinates, each `bits_per_gene` bits spread evenly over [-window, +window]
 //                                                                       decode_chromosome, Eq. (1)
-//   - fitness: the source scan's ranges against the target scan seen from the candidate pose.
+//   - matching: the source scan's ranges against the target scan seen from the candidate pose.
 //     Target points moved into the source frame (p = T^-1 q) fall into the source's beams by
-//     bearing (the nearest per beam, as the sensor would see it); where a beam holds both a
-//     source reading r_k and a projected range r'_k it overlaps, and
-//       e(T) = (1 / N_o) sum_k min((r_k - r'_k)^2, c^2)                  Eq. (2)
-//     over the N_o overlapping beams, c = max_range_difference.
-//   - overlap criterion: a pose whose overlap N_o / N_source is below `min_overlap` is
-//     infeasible (e = +inf).                                             Eq. (3)
+//     bearing (the nearest per beam, as the sensor would see it); a source reading r_k is
+//     matched when its beam holds a projected range r'_k with |r_k - r'_k| <= E_max
+//     (`max_range_difference`).
+//   - matching index: I = N_m / N, the matched readings over the source's N readings, and the
+//     mean squared difference of the matched ones, e_m^2 = (1 / N_m) sum (r_k - r'_k)^2.
+//   - fitness (lower is fitter): every source reading costs its squared difference when matched
+//     and E_max^2 when not (no target there, or too far):
+//       e(T) = I e_m^2 + (1 - I) E_max^2                                  Eq. (2)
+//     A pose that explains few readings cannot score well however closely it fits those.
+//   - feasibility: a pose whose matching index is below `min_matching_index` is infeasible
+//     (e = +inf).                                                        Eq. (3)
 //   - operators: elitism, tournament selection, one-point crossover, bit-flip mutation.
 //   - refinement: match_icp (Besl & McKay point-to-point ICP, icp.hpp) from the GA's best pose
-//     (or from the guess when the guess scores better).
+//     (or from the guess when the guess scores better), its association gate reduced from the
+//     ICP alone's to what the GA left: E_icp = clamp(k e_m, E_min, E_max_icp), k e_m being k
+//     times the RMS range difference of the matched readings at that pose.    Eq. (4)
+//     Pairs farther apart than the GA's residual error are then outliers (what one scan sees and
+//     the other does not), not the pose error ICP has to remove.
 // The source's beam grid (first bearing, spacing) is read off its points, which are in the
 // sensor frame and in beam order; `angular_resolution` overrides the spacing. The equation numbers
 // are this file's own (docs/methods/ga_icp.md maps them to the paper's description).
@@ -27,6 +36,12 @@
 // Seeded: the same config (seed included) gives the identical result; the search is serial.
 // MatchResult: the ICP stage's estimate, covariance (Censi, point-to-point), residual, inliers
 // and degeneracy; `iterations` = GA generations + ICP iterations; `converged` is the ICP's.
+//
+// What is the paper's and what is ours: the paper's GA searches the odometry error window with
+// short binary chromosomes and a fitness built on the matched points and the matching index,
+// then runs ICP with a smaller E_max than ICP alone uses. The exact forms above (the range
+// difference along beams, Eq. (2), the gate of Eq. (4) and its factor) are this library's reading;
+// docs/methods/ga_icp.md says which figures were measured.
 
 #include <numbers>
 #include <Eigen/Core>
@@ -56,13 +71,15 @@ struct GaIcpConfig {
   int elite = 2;
   int tournament_size = 3;
   std::uint64_t seed = 1;
-  // Fitness, Eq. (2)-(3).
-  double max_range_difference = 0.5;
-  double min_overlap = 0.3;
+  // Matching and fitness, Eq. (2)-(3).
+  double max_range_difference = 0.5;  // m, E_max of the GA: a reading matches within this
+  double min_matching_index = 0.3;    // 1: poses matching fewer readings are infeasible
   double angular_resolution = 0.0;
-  // ICP refinement (match_icp, point-to-point).
+  // ICP refinement (match_icp, point-to-point), its gate reduced from the GA's result, Eq. (4).
   int icp_max_iterations = 50;
-  double icp_max_correspondence_distance = 1.0;
+  double icp_max_correspondence_distance = 1.0;  // m, the gate's upper bound (ICP alone's gate)
+  double icp_gate_factor = 3.0;                  // 1, k of Eq. (4); 0: no reduction (the upper bound)
+  double icp_min_correspondence_distance = 0.1;  // m, the gate's lower bound
   int icp_min_correspondences = 10;
 };
 
@@ -79,11 +96,13 @@ void describe(Fields& f, GaIcpConfig& c) {
   f.number("elite", c.elite, "1", at_least(0), "best chromosomes copied unchanged, < population");
   f.number("tournament_size", c.tournament_size, "1", at_least(1), "chromosomes drawn per selection");
   f.number("seed", c.seed, "1", any_value(), "the random stream");
-  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "c: a beam's range difference is clipped here, Eq. (2)-(3)");
-  f.number("min_overlap", c.min_overlap, "1", between(0, 1), "overlapping beams over source beams below which a pose is infeasible");
+  f.number("max_range_difference", c.max_range_difference, "m", greater_than(0), "E_max of the GA: a reading matches when its range difference is at most this; an unmatched one costs its square, Eq. (2)");
+  f.number("min_matching_index", c.min_matching_index, "1", between(0, 1), "matched readings over source readings below which a pose is infeasible, Eq. (3)");
   f.number("angular_resolution", c.angular_resolution, "rad", at_least(0), "the source's beam spacing (0: inferred from the points)");
   f.number("icp_max_iterations", c.icp_max_iterations, "1", at_least(1), "the ICP refinement (match_icp, point-to-point)");
-  f.number("icp_max_correspondence_distance", c.icp_max_correspondence_distance, "m", greater_than(0), "(match_icp's default)");
+  f.number("icp_max_correspondence_distance", c.icp_max_correspondence_distance, "m", greater_than(0), "upper bound of the ICP stage's gate (match_icp's default gate), Eq. (4)");
+  f.number("icp_gate_factor", c.icp_gate_factor, "1", at_least(0), "the ICP gate is this times the RMS range difference of the matched readings at the GA's pose, Eq. (4); 0: the upper bound");
+  f.number("icp_min_correspondence_distance", c.icp_min_correspondence_distance, "m", greater_than(0), "lower bound of the ICP stage's gate, Eq. (4)");
   f.number("icp_min_correspondences", c.icp_min_correspondences, "1", at_least(3), "");
 }
 
@@ -96,12 +115,13 @@ void validate(const GaIcpConfig& config);
 Eigen::Vector3d decode_chromosome(std::uint64_t chromosome, const GaIcpConfig& config);
 
 struct RangeDifferenceScore {
-  double error = std::numeric_limits<double>::infinity();  // m^2, Eq. (2); +inf when infeasible, Eq. (3)
-  double overlap = 0.0;                                    // 1, overlapping beams over source beams
-  std::size_t overlapping_beams = 0;
+  double error = std::numeric_limits<double>::infinity();  // m^2, e of Eq. (2); +inf when infeasible, Eq. (3)
+  double matching_index = 0.0;                             // 1, I: matched readings over source readings
+  std::size_t matched_readings = 0;                        // N_m
+  double matched_rms = 0.0;                                // m, e_m: RMS range difference of the matched readings
 };
 
-/// The range-difference metric of one source scan, Eq. (2)-(3): built once, scored per pose.
+/// The matching of one source scan, Eq. (2)-(3): built once, scored per pose.
 class RangeDifferenceMetric {
  public:
   /// `source` in its sensor frame and in beam order; `angular_resolution` (rad) 0 infers the spacing.
@@ -123,7 +143,7 @@ class RangeDifferenceMetric {
   std::vector<double> ranges_;  // m, per beam; 0 where the source has no reading
   std::size_t readings_ = 0;    // beams with a reading
   double max_range_difference_ = 0.5;
-  double min_overlap_ = 0.3;
+  double min_matching_index_ = 0.3;
 };
 
 struct GaSearchResult {
@@ -137,8 +157,14 @@ struct GaSearchResult {
 GaSearchResult ga_search(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                          const GaIcpConfig& config = {});
 
+/// The ICP stage's gate after a search, Eq. (4): clamp(icp_gate_factor e_m, icp_min_correspondence_distance,
+/// icp_max_correspondence_distance) at the search's pose; the upper bound when that pose is infeasible
+/// or icp_gate_factor is 0.
+double icp_gate(const GaSearchResult& search, const GaIcpConfig& config);
+
 /// The hybrid: ga_search, then match_icp from its pose (from the guess when no pose in the window
-/// is feasible). Fewer than 3 points in either cloud: the guess, not converged, huge covariance.
+/// is feasible) with the gate of Eq. (4). Fewer than 3 points in either cloud: the guess, not
+/// converged, huge covariance.
 MatchResult match_ga_icp(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source_guess,
                          const GaIcpConfig& config = {});
 

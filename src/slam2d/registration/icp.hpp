@@ -6,8 +6,11 @@
 // apart than `max_correspondence_distance` (not in the paper, which assumes the data to be a
 // subset of the model), and registers the original source points to their closest points in
 // closed form (Sec. III-C: SVD or unit quaternion, closed_form.hpp). `accelerated` adds the
-// paper's accelerated ICP (Sec. IV-E): when the last registration-vector steps point the same
-// way, the vector is extrapolated along the step by a line or parabola fitted to the errors.
+// paper's accelerated ICP (Sec. IV-C): when the last two steps of the registration vector point
+// the same way (within `acceleration_angle`), the vector is moved on along the step to the zero
+// of a line or the minimum of a parabola fitted to the last three errors, at most
+// `acceleration_max_factor` times the step; an extrapolation whose closest-point error exceeds
+// the error plain ICP had reached is undone (a guard of ours, see icp.cpp).
 //
 // Presets: configs/icp.yaml, configs/icp-accelerated.yaml. Method page: docs/methods/icp.md.
 
@@ -26,7 +29,7 @@ struct IcpConfig {
   double min_mse_change = 1e-8;             // m^2, >= 0; stop when |d_{k-1} - d_k| falls below (Besl's tau)
   double min_translation_step = 1e-4;       // m, >= 0; stop when a step moves less than this ...
   double min_rotation_step = 1e-4;          // rad, >= 0; ... and turns less than this
-  bool accelerated = false;                 // Besl & McKay's accelerated ICP (Sec. IV-E)
+  bool accelerated = false;                 // Besl & McKay's accelerated ICP (Sec. IV-C)
   double acceleration_angle = 0.1745329252;  // rad, in (0, pi); steps within this angle are aligned (paper: 10 deg)
   double acceleration_max_factor = 25.0;    // 1, > 0; extrapolation capped at this times the last step (paper: 25)
 };
@@ -40,7 +43,7 @@ void describe(Fields& f, IcpConfig& c) {
   f.number("min_mse_change", c.min_mse_change, "m^2", at_least(0), "stop when the MSE changes by less (Besl's tau)");
   f.number("min_translation_step", c.min_translation_step, "m", at_least(0), "stop when a step moves less than this ...");
   f.number("min_rotation_step", c.min_rotation_step, "rad", at_least(0), "... and turns less than this");
-  f.flag("accelerated", c.accelerated, "Besl & McKay's accelerated ICP (Sec. IV-E)");
+  f.flag("accelerated", c.accelerated, "Besl & McKay's accelerated ICP (Sec. IV-C)");
   f.number("acceleration_angle", c.acceleration_angle, "rad", open_interval(0, 3.141592653589793),
            "steps within this angle are aligned (paper: 10 deg)");
   f.number("acceleration_max_factor", c.acceleration_max_factor, "1", greater_than(0),
