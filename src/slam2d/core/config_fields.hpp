@@ -7,7 +7,7 @@
 //   void describe(Fields& f, IcpConfig& c) {
 //     f.number("max_iterations", c.max_iterations, "1", at_least(1), "registrations before giving up");
 //     f.choice("solver", c.solver, "closed-form solver of each registration");
-//     f.flag("accelerated", c.accelerated, "Besl & McKay's accelerated ICP (Sec. IV-E)");
+//     f.flag("accelerated", c.accelerated, "Besl & McKay's accelerated ICP");
 //     f.section("kernel", c.kernel, "robust kernel on the residual");
 //   }
 //
