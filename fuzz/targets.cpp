@@ -26,14 +26,31 @@
 namespace slam2d::fuzz {
 namespace {
 
-// The readers take paths: each input is written to a file in this process's own folder.
+// The readers take paths: each input is written to a file in this process's own folder, in
+// memory (/dev/shm) where there is one.
+class ScratchFolder {
+ public:
+  ScratchFolder() {
+    const std::filesystem::path base =
+        std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path();
+    path_ = base / ("slam2d-fuzz-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 const std::filesystem::path& scratch() {
-  static const std::filesystem::path dir = [] {
-    const std::filesystem::path path = std::filesystem::temp_directory_path() / ("slam2d-fuzz-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(path);
-    return path;
-  }();
-  return dir;
+  static const ScratchFolder folder;
+  return folder.path();
 }
 
 std::string write_input(const std::string& name, const std::uint8_t* data, std::size_t size) {
