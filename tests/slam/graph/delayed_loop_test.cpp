@@ -156,8 +156,9 @@ struct Scenario {
 
 // The first pass along y = 10 (x from 1 to 21 m, every 0.2 m), a 30 m detour away from the hall,
 // the revisit along the same line with 0.4 m and 0.03 rad of drift (the searching keyframes, every
-// search_interval-th, see: skewed, crowded, clean, clean, slightly skewed), and away again.
-Scenario drive(RevisitRun& run, int search_interval) {
+// search_interval-th, see: skewed, crowded, clean, clean, slightly skewed), and away again unless
+// the log ends there.
+Scenario drive(RevisitRun& run, int search_interval, bool leave = true) {
   const auto interval = static_cast<std::size_t>(search_interval);
   for (int i = 0; i <= 100; ++i) {
     const SE2 pose(1.0 + 0.2 * i, 10.0, 0.0);
@@ -190,7 +191,7 @@ Scenario drive(RevisitRun& run, int search_interval) {
     run.add(truth, estimate, searching ? searches[s] : Sight::kClean, searching ? turn_rates[s] : 0.0);
   }
   scenario.first_away_search = run.size() + (interval - run.size() % interval) % interval;
-  detour(drift * turned);
+  if (leave) detour(drift * turned);
   return scenario;
 }
 
@@ -209,6 +210,20 @@ TEST(DelayedLoopClosure, KeepsTheBestClosureOfAChainUntilTheRobotLeavesIt) {
   const SE2 error = run.error(added.closure);
   EXPECT_LT(error.translation().norm(), 0.03);
   EXPECT_LT(std::abs(error.theta()), 0.01);
+}
+
+// A log that ends on the chain: the held closure goes in at the end, once.
+TEST(DelayedLoopClosure, ReleasesTheHeldClosureAtTheEndOfTheLog) {
+  LoopClosureConfig config;
+  config.delayed = true;
+  RevisitRun run(config);
+  const Scenario scenario = drive(run, config.search_interval, false);
+  EXPECT_TRUE(run.added().empty());
+  run.finish();
+  ASSERT_EQ(run.added().size(), 1u);
+  EXPECT_EQ(run.added().front().at, RevisitRun::kReleased);
+  EXPECT_LT(std::abs(run.error(run.added().front().closure).theta()), 0.01);
+  EXPECT_NE(run.added().front().closure.keyframe, scenario.revisit_searches[0]);
 }
 
 // The same revisit closed at once: the skewed keyframe's closure goes in, wrong by more than the

@@ -324,6 +324,7 @@ std::optional<LoopClosure> LoopCloser::search_globally(const std::vector<Keyfram
     const Reach r = reach(chain);
     return r.drift <= largest_window(local) && r.heading <= local.window_theta;
   });
+  std::erase_if(chains, [&](const Chain& chain) { return is_held(chain); });  // closed, once the robot leaves it
   if (chains.empty()) return std::nullopt;
   const auto started = std::chrono::steady_clock::now();
   ++stats_.global_searches;
@@ -429,6 +430,13 @@ bool same_chain(const LoopClosure& closure, std::size_t begin, std::size_t end) 
 
 }  // namespace
 
+// A chain with a closure held back (delayed mode): it is closed, only later; a large correction
+// to it, or a global search over it, would be a second, conflicting closure of the same chain.
+bool LoopCloser::is_held(Chain chain) const {
+  return std::any_of(held_.begin(), held_.end(),
+                     [&](const LoopClosure& held) { return same_chain(held, chain.first, chain.second); });
+}
+
 // Delayed loop closure, from a keyframe that searched the large window: the held closures whose
 // chain this search did not attempt are closed (the robot has left them); each new closure
 // replaces the held one of its chain when its response is higher and is dropped when not, or is
@@ -485,6 +493,7 @@ std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframe
     } else if (!is_large(closure)) {
       loops.push_back(closure);
     } else if (passes_strict(closure) && within_drift(closure, drift) &&
+               !is_held({closure.chain_begin, closure.chain_end}) &&
                (!large_found || closure.score > large_found->score)) {
       large_found = closure;
     }
@@ -492,9 +501,7 @@ std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframe
   // Nothing found where the estimate is: chains whose drift the large window does not cover.
   const bool global_due =
       final || !last_global_ || current >= *last_global_ + static_cast<std::size_t>(large.global_interval);
-  // (A closure held back by the delayed rule is one found where the estimate is.)
-  if (search_large_window && large.global_search && loops.empty() && held_.empty() && !large_found &&
-      !pending_large_ && global_due) {
+  if (search_large_window && large.global_search && loops.empty() && !large_found && !pending_large_ && global_due) {
     large_found = search_globally(keyframes, graph, current, drift);
   }
   if (config_.delayed && search_large_window) loops = delay(loops, verified.attempted);
