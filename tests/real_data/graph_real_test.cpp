@@ -22,8 +22,9 @@ namespace slam2d {
 namespace {
 
 // The scans of a CARMEN log up to `last_stamp` (with their odometry or without), then finish().
-GraphSlam map_log(const std::filesystem::path& log, bool odometry, double last_stamp = 1e300) {
-  GraphSlam slam;
+GraphSlam map_log(const std::filesystem::path& log, bool odometry, double last_stamp = 1e300,
+                  const GraphSlamConfig& config = {}) {
+  GraphSlam slam(config);
   CarmenReader reader(log.string());
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
@@ -69,12 +70,19 @@ TEST(GraphSlamRealData, ClosesTheLoopsOfAces) {
 // 1045 s ends just before the keyframe whose search closes the loop in the full run (back in the
 // corridor of 489 s): only finish()'s search from the last keyframes closes it, a large correction
 // confirmed by a second keyframe (the code before left the end 3.56 m off the reference, measured).
+// The cut was chosen on the run with immediate loop closure; with delayed closure (the default)
+// the estimate differs and the same loop closes a few keyframes earlier (0.67 m measured).
 TEST(GraphSlamRealData, ClosesALoopAtTheEndOfACutLog) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  const GraphSlam cut = map_log(data / "aces/aces.clf.gz", false, 1045.0);
+  GraphSlamConfig immediate;
+  immediate.loop_closure.delayed = false;
+  const GraphSlam cut = map_log(data / "aces/aces.clf.gz", false, 1045.0, immediate);
   EXPECT_GE(cut.stats().final_search_closures, 1u);
   EXPECT_GE(cut.stats().large_closures, 1u);
-  EXPECT_LT(end_error(cut.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (0.96 measured)
+  EXPECT_LT(end_error(cut.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (1.08 measured)
+  const GraphSlam delayed = map_log(data / "aces/aces.clf.gz", false, 1045.0);
+  EXPECT_GE(delayed.stats().large_closures, 1u);
+  EXPECT_LT(end_error(delayed.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (0.67 measured)
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Graph SLAM on the simulated office: keyframe rules and chains against hand cases, the loop of
 // the office run closed and the trajectory recovered within stated bounds (with and without
-// odometry, with delayed closure), a false loop edge absorbed by the robust kernel, determinism.
+// odometry, with immediate closure), a false loop edge absorbed by the robust kernel, determinism.
 
 #include <gtest/gtest.h>
 
@@ -87,9 +87,9 @@ TEST_P(GraphSlamOffice, ClosesTheLoopAndRecoversTheTrajectory) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, GraphSlamOffice,
-                         ::testing::Values(OfficeCase{"odometry", true, false, 0.05},
-                                           OfficeCase{"no_odometry", false, false, 0.05},
-                                           OfficeCase{"delayed", true, true, 0.05}),
+                         ::testing::Values(OfficeCase{"odometry", true, true, 0.05},
+                                           OfficeCase{"no_odometry", false, true, 0.05},
+                                           OfficeCase{"immediate", true, false, 0.05}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 // Seed 1 drives along the office corridor early on; without solution remapping the tracker stalled

@@ -158,6 +158,8 @@ void GraphSlam::copy_loop_stats() {
   stats_.large_closures = loops.large_closures;
   stats_.unconfirmed_closures = loops.unconfirmed;
   stats_.global_search_seconds = loops.global_seconds;
+  stats_.held_replaced = loops.held_replaced;
+  stats_.held_dropped = loops.held_dropped;
 }
 
 void GraphSlam::optimize() {

@@ -2,8 +2,8 @@
 #pragma once
 // Graph SLAM in the shape of Karto (K. Konolige, G. Grisetti, R. Kuemmerle, W. Burgard,
 // B. Limketkai, R. Vincent, "Efficient sparse pose adjustment for 2D mapping", IROS 2010, whose
-// front end is Karto's) with the changes of the 2015 indoor-localization study (time-based
-// keyframes, delayed loop closure) and a robust kernel on loop edges:
+// front end is Karto's, with its delayed loop closure) with the time-based keyframes of the 2015
+// indoor-localization study and a robust kernel on loop edges:
 //
 // 1. keyframes: a scan becomes a node when the robot moved min_distance or turned min_angle since
 //    the last keyframe, or min_time passed (keyframes.hpp);
@@ -17,7 +17,9 @@
 //    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
 //    model of the distance travelled and the angle turned along the graph's path between them)
 //    outgrows that window, a global search over the whole drift; a large correction is confirmed
-//    by a second keyframe before it goes in (loop_closure.hpp);
+//    by a second keyframe before it goes in; a local closure is held back while later searches
+//    keep matching the same chain, replaced by a better one, and goes in when they stop
+//    (loop_closure.hpp);
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
 //    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
@@ -97,6 +99,8 @@ struct GraphSlamStats {
   std::size_t large_closures = 0;       // large corrections confirmed (each adds two loop edges)
   std::size_t unconfirmed_closures = 0; // large corrections dropped for want of a confirmation
   std::size_t final_search_closures = 0;  // loop edges added by finish()
+  std::size_t held_replaced = 0;        // delayed: held closures replaced by a better one of the same chain
+  std::size_t held_dropped = 0;         // delayed: closures dropped for a better one held to the same chain
   std::size_t optimizations = 0;
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   double optimization_seconds = 0.0;    // wall time of the back end

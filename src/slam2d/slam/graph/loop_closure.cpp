@@ -14,6 +14,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/registration/kd_tree.hpp"
 
 namespace slam2d {
 
@@ -173,6 +174,27 @@ std::vector<Chain> chains_around(const std::vector<Keyframe>& keyframes, const P
   return chains;
 }
 
+// Karto's response at the matched pose: the mean over the scan's points of a Gaussian (the search
+// kernel's sigma) of their distance to the map, point to line where the map point has a normal.
+// Unlike the score (the share of points on the table's cells, which saturates at 1 for any good
+// match), it keeps rising as a match gets better, so that two closures of a chain can be told apart.
+double response(const MatchMap& map, const PointCloud2& scan, const SE2& T_map_robot, double sigma) {
+  const PointCloud2& target = map.grid.target();
+  double sum = 0.0;
+  for (const Point2& point : scan.points) {
+    const Point2 p = T_map_robot * point;
+    const Neighbor nearest = map.grid.tree().nearest(p);
+    if (nearest.index >= target.size()) continue;
+    double squared = nearest.squared_distance;
+    if (target.has_normals() && target.normals[nearest.index].squaredNorm() > 0.0) {
+      const double along_normal = target.normals[nearest.index].dot(p - target.points[nearest.index]);
+      squared = along_normal * along_normal;
+    }
+    sum += std::exp(-0.5 * squared / (sigma * sigma));
+  }
+  return scan.empty() ? 0.0 : sum / static_cast<double>(scan.size());
+}
+
 double largest_window(const CorrelativeConfig& correlative) {
   return std::max(correlative.window_x, correlative.window_y);
 }
@@ -220,6 +242,7 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
   closure.edge.information = information_from_covariance(rotate_covariance(match.covariance, -T_map_anchor.theta()));
   closure.edge.robust = true;
   closure.score = match.score;
+  closure.response = response(map, scan, match.T_target_source, match_config.correlative.sigma);
   closure.inlier_fraction = match.inlier_fraction;
   closure.keyframe = current;
   closure.anchor = anchor;
@@ -247,26 +270,28 @@ LoopCloser::Uncertainty LoopCloser::uncertainty(const std::vector<Keyframe>& key
   return uncertainty;
 }
 
-std::vector<LoopClosure> LoopCloser::verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
-                                            std::size_t current, const Uncertainty& uncertainty,
-                                            bool search_large_window) {
+LoopCloser::Verified LoopCloser::verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
+                                        std::size_t current, const Uncertainty& uncertainty, bool search_large_window) {
   const SE2& estimate = node_pose(graph, keyframes[current]);
   const std::vector<Chain> chains = chains_around(keyframes, graph, current, estimate.translation(),
                                                   constant(config_.search_radius), config_, uncertainty.linked, true);
   int loops = search_large_window ? 0 : config_.max_chains;
   int near = 0;
-  std::vector<LoopClosure> closures;
+  Verified verified;
   for (const Chain& chain : chains) {
     const bool is_near = is_linked(keyframes, uncertainty.linked, chain);
     if (is_near ? near++ >= config_.max_near_chains : loops++ >= config_.max_chains) continue;
-    if (!is_near) ++stats_.attempts;
+    if (!is_near) {
+      ++stats_.attempts;
+      verified.attempted.push_back(chain);
+    }
     auto closure =
         match_chain(keyframes, graph, current, chain, estimate, is_near ? config_.near_match : config_.match);
     if (!closure) continue;
     closure->search = is_near ? LoopSearch::kNear : LoopSearch::kLocal;
-    closures.push_back(*closure);
+    verified.closures.push_back(*closure);
   }
-  return closures;
+  return verified;
 }
 
 // The global search: the chains within the drift radius whose drift the large window does not
@@ -299,6 +324,7 @@ std::optional<LoopClosure> LoopCloser::search_globally(const std::vector<Keyfram
     const Reach r = reach(chain);
     return r.drift <= largest_window(local) && r.heading <= local.window_theta;
   });
+  std::erase_if(chains, [&](const Chain& chain) { return is_held(chain); });  // closed, once the robot leaves it
   if (chains.empty()) return std::nullopt;
   const auto started = std::chrono::steady_clock::now();
   ++stats_.global_searches;
@@ -394,19 +420,49 @@ std::vector<LoopClosure> LoopCloser::confirmed(LoopClosure second) {
   return {first, second};
 }
 
-std::vector<LoopClosure> LoopCloser::delay(std::vector<LoopClosure> verified) {
+namespace {
+
+// Two chains are the same place when their runs of keyframes overlap (a chain found again from a
+// keyframe further on has moved along with the robot).
+bool same_chain(const LoopClosure& closure, std::size_t begin, std::size_t end) {
+  return closure.chain_begin < end && begin < closure.chain_end;
+}
+
+}  // namespace
+
+// A chain with a closure held back (delayed mode): it is closed, only later; a large correction
+// to it, or a global search over it, would be a second, conflicting closure of the same chain.
+bool LoopCloser::is_held(Chain chain) const {
+  return std::any_of(held_.begin(), held_.end(),
+                     [&](const LoopClosure& held) { return same_chain(held, chain.first, chain.second); });
+}
+
+// Delayed loop closure, from a keyframe that searched the large window: the held closures whose
+// chain this search did not attempt are closed (the robot has left them); each new closure
+// replaces the held one of its chain when its response is higher and is dropped when not, or is
+// held as the first of its chain.
+std::vector<LoopClosure> LoopCloser::delay(const std::vector<LoopClosure>& verified,
+                                           const std::vector<Chain>& attempted) {
   std::vector<LoopClosure> ready;
-  auto best = std::max_element(verified.begin(), verified.end(),
-                               [](const LoopClosure& a, const LoopClosure& b) { return a.score < b.score; });
-  const bool improves = best != verified.end() && pending_ && best->score > pending_->score &&
-                        best->chain_begin < pending_->chain_end && pending_->chain_begin < best->chain_end;
-  if (improves) {
-    pending_ = *best;
-    return ready;
+  std::erase_if(held_, [&](const LoopClosure& held) {
+    const bool left = std::none_of(attempted.begin(), attempted.end(),
+                                   [&](const Chain& chain) { return same_chain(held, chain.first, chain.second); });
+    if (left) ready.push_back(held);
+    return left;
+  });
+  for (const LoopClosure& closure : verified) {
+    auto same = std::find_if(held_.begin(), held_.end(), [&](const LoopClosure& held) {
+      return same_chain(held, closure.chain_begin, closure.chain_end);
+    });
+    if (same == held_.end()) {
+      held_.push_back(closure);
+    } else if (closure.response > same->response) {
+      *same = closure;
+      ++stats_.held_replaced;
+    } else {
+      ++stats_.held_dropped;
+    }
   }
-  if (pending_) ready.push_back(*pending_);
-  pending_.reset();
-  if (best != verified.end()) pending_ = *best;
   return ready;
 }
 
@@ -430,12 +486,14 @@ std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframe
   std::vector<LoopClosure> closures;
   std::vector<LoopClosure> loops;
   std::optional<LoopClosure> large_found;
-  for (LoopClosure& closure : verify(keyframes, graph, current, drift, search_large_window)) {
+  const Verified verified = verify(keyframes, graph, current, drift, search_large_window);
+  for (const LoopClosure& closure : verified.closures) {
     if (closure.near()) {
       closures.push_back(closure);
     } else if (!is_large(closure)) {
       loops.push_back(closure);
     } else if (passes_strict(closure) && within_drift(closure, drift) &&
+               !is_held({closure.chain_begin, closure.chain_end}) &&
                (!large_found || closure.score > large_found->score)) {
       large_found = closure;
     }
@@ -446,7 +504,7 @@ std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframe
   if (search_large_window && large.global_search && loops.empty() && !large_found && !pending_large_ && global_due) {
     large_found = search_globally(keyframes, graph, current, drift);
   }
-  if (config_.delayed) loops = delay(std::move(loops));
+  if (config_.delayed && search_large_window) loops = delay(loops, verified.attempted);
   closures.insert(closures.end(), loops.begin(), loops.end());
   if (large_found && !pending_large_) {
     pending_large_ = large_found;
@@ -458,9 +516,8 @@ std::vector<LoopClosure> LoopCloser::close(const std::vector<Keyframe>& keyframe
 }
 
 std::vector<LoopClosure> LoopCloser::release() {
-  std::vector<LoopClosure> released;
-  if (pending_) released.push_back(*pending_);
-  pending_.reset();
+  std::vector<LoopClosure> released = std::move(held_);
+  held_.clear();
   if (pending_large_) {  // the log ended before a keyframe further on could confirm it
     pending_large_.reset();
     ++stats_.unconfirmed;

@@ -16,9 +16,12 @@
 // Chains the graph already links to the new keyframe (within min_path_distance along its edges,
 // after an earlier closure) are not searched again over the large window; optionally they are
 // matched over the small window of the sequential constraint instead (Karto's "near chains").
-// Delayed loop closure (the 2015 study's change to Karto, optional): a verified closure is kept
-// while the next keyframes' closures to the same chain keep improving the response, and added
-// when they stop.
+// Delayed loop closure (Karto's rule, Konolige et al. 2010, Sec. III): a verified closure is held
+// while later keyframes keep matching against the same chain (overlapping runs of earlier
+// keyframes); a closure to that chain with a higher response replaces it, a lower one is dropped;
+// it goes in when a large-window search no longer attempts the chain (the robot has left it) or
+// at the end of the log. Only keyframes that search the large window (every search_interval-th)
+// judge: the keyframes between them attempt nothing, which says nothing about where the robot is.
 //
 // Large corrections (LargeClosureConfig): a closure that moves the estimate by more than the
 // robust kernel of the back end would follow (metres of drift) must be right, because it is
@@ -183,7 +186,10 @@ struct LoopClosureConfig {
   double max_translation_variance = 0.01;
   bool reject_degenerate = true;
   double map_radius = 15.0;
-  bool delayed = false;
+  // Delayed loop closure (Karto's rule, above). On: better on each of Intel, ACES and FR079
+  // (0.0178 / 0.0369 / 0.0375 m against 0.0182 / 0.0370 / 0.0387 m), chosen by leave-one-out
+  // (docs/methods/graph_slam.md).
+  bool delayed = true;
   DriftModel drift{};
   // The large window: +-4 m, +-0.35 rad. A +-90 deg window costs about 4x more (branch-and-bound
   // keeps it affordable) but on FR079 it lets symmetric rooms in: 0.087 m mean relation error
@@ -217,7 +223,7 @@ void describe(Fields& f, LoopClosureConfig& c) {
   f.flag("reject_degenerate", c.reject_degenerate, "the scene's Fisher information must constrain every direction");
   f.number("map_radius", c.map_radius, "m", greater_than(0),
            "chain points this far beyond the search window from the estimate are left out");
-  f.flag("delayed", c.delayed, "delayed loop closure");
+  f.flag("delayed", c.delayed, "hold each chain's best closure until the robot leaves the chain (Karto)");
   f.section("drift", c.drift, "the odometry drift model of the global search");
   f.section("match", c.match, "the large window's match");
   f.section("near_match", c.near_match, "for near chains: the sequential constraint's window");
@@ -237,6 +243,7 @@ enum class LoopSearch {
 struct LoopClosure {
   PoseGraphEdge edge;
   double score = 0.0;            // correlative response, the fraction of points on the chain's map
+  double response = 0.0;         // Karto's response: mean Gaussian of the points' distances to the map
   double inlier_fraction = 0.0;  // after refinement
   std::size_t keyframe = 0;      // the keyframe the closure was searched from
   std::size_t anchor = 0;        // the chain's keyframe the edge starts at
@@ -253,6 +260,8 @@ struct LoopClosure {
 /// What the searches did, for the run's summary.
 struct LoopCloserStats {
   std::size_t attempts = 0;              // chains searched over the large window
+  std::size_t held_replaced = 0;         // delayed: held closures replaced by a better one of the same chain
+  std::size_t held_dropped = 0;          // delayed: closures dropped for a better one held to the same chain
   std::size_t global_searches = 0;
   std::size_t global_chains = 0;         // chains searched by global searches
   std::size_t global_closures = 0;       // confirmed closures first found by a global search
@@ -291,7 +300,7 @@ class LoopCloser {
                                  bool final = false);
   /// The keyframes after the last one searched over the large window (finish() searches them).
   std::size_t first_unsearched() const { return last_searched_ ? *last_searched_ + 1 : 0; }
-  /// At the end of a log: the closure still held back (delayed mode), released; a large
+  /// At the end of a log: the closures still held back (delayed mode), released; a large
   /// correction still unconfirmed is dropped (the keyframes before it were tried when it was found).
   std::vector<LoopClosure> release();
 
@@ -303,8 +312,13 @@ class LoopCloser {
   struct Uncertainty;  // per keyframe, from the current one
 
   Uncertainty uncertainty(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current) const;
-  std::vector<LoopClosure> verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current,
-                                  const Uncertainty& uncertainty, bool search_large_window);
+  struct Verified {
+    std::vector<LoopClosure> closures;
+    std::vector<Chain> attempted;  // the chains searched over the large window, verified or not
+  };
+
+  Verified verify(const std::vector<Keyframe>& keyframes, const PoseGraph& graph, std::size_t current,
+                  const Uncertainty& uncertainty, bool search_large_window);
   std::optional<LoopClosure> search_globally(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
                                              std::size_t current, const Uncertainty& uncertainty);
   std::optional<LoopClosure> confirm(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
@@ -317,12 +331,13 @@ class LoopCloser {
                                          const MapMatchConfig* coarse = nullptr) const;
   bool is_large(const LoopClosure& closure) const;
   bool passes_strict(const LoopClosure& closure) const;
-  std::vector<LoopClosure> delay(std::vector<LoopClosure> verified);
+  bool is_held(Chain chain) const;
+  std::vector<LoopClosure> delay(const std::vector<LoopClosure>& verified, const std::vector<Chain>& attempted);
   std::vector<LoopClosure> confirmed(LoopClosure second);
 
   LoopClosureConfig config_;
   LoopCloserStats stats_;
-  std::optional<LoopClosure> pending_;        // delayed mode: the best closure so far
+  std::vector<LoopClosure> held_;            // delayed mode: the best closure so far of each chain
   std::optional<LoopClosure> pending_large_;  // a large correction waiting for its confirmation
   std::optional<std::size_t> last_searched_;  // the last keyframe searched over the large window
   std::optional<std::size_t> last_global_;    // the last keyframe a global search ran from
