@@ -34,8 +34,10 @@ Usage: /usr/bin/python3 bench/datasets/localize_benchmark.py [--slam2d build/rel
            [--data $SLAM2D_DATA] [--logs intel aces fr079] [--methods markov ekf mcl mcl-random hybrid]
            [--conditions ...] [--seeds 5] [--duration S] [--quick] [--jobs 1] [--threshold 1]
            [--hold 10] [--out /tmp/slam2d_localize_benchmark] [--resume] [--json] [--quiet]
---quick: 2 seeds and the first 300 s of each log (about 6 min on 2 cores; the full run, 5 seeds on
-the whole logs, takes about 45 min with --jobs 2). --resume reuses the runs already in --out.
+--quick: 2 seeds and the first 300 s of each log (261 runs, 4.7 min with --jobs 1). `--seeds 3
+--duration 600` (bench/BENCHMARKS.md) took 12.3 min; the full run, 5 seeds on the whole logs (2.8
+times the data), about an hour with --jobs 1, half that with --jobs 2 (estimated from those).
+--resume reuses the runs already in --out.
 """
 
 import argparse
@@ -392,7 +394,7 @@ def main(argv=None):
     done = [0]
     lock = threading.Lock()
 
-    def task(group):
+    def task(group):  # one degraded log at a time: perturbed logs are removed after their methods ran
         log, condition, seed, methods = group
         rows = run_group(args, log, condition, seed, methods, *references[log], plain_mcl)
         with lock:
