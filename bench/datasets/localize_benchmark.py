@@ -210,7 +210,7 @@ def time_subset(log, out, duration):
     write_atomic(out, buffer.getvalue())
 
 
-def run(command, quiet_stderr=True):
+def run(command):
     result = subprocess.run(["nice"] + command, capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
