@@ -97,14 +97,16 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
     EXPECT_EQ(spec.rfind(kind + ":", 0), 0u) << spec;
     EXPECT_EQ(fault_spec(parse_fault(spec)), spec);
   }
-  EXPECT_EQ(fault_kinds().size(), 16u);
+  EXPECT_EQ(fault_kinds().size(), 17u);
+  EXPECT_EQ(fault_spec(parse_fault("odom-noise")), "odom-noise:translation=0.05,heading=0.02,rotation=0.05");
   EXPECT_EQ(fault_spec(parse_fault("odom-reset:every=30")), "odom-reset:every=30,start=30");
 }
 
 TEST(FaultSpec, BadSpecsAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"wobble", "unknown fault kind 'wobble'"},
-      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, odom-reset, wheel-scale, heading-drift, scan-gap,"},
+      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, odom-reset, wheel-scale, heading-drift, odom-noise, scan-gap,"},
+      {"odom-noise:translation=-1", "translation=-1 is out of range [0, 10]"},
       {"odom-reset:every=0", "every=0 is out of range (0, inf)"},
       {"stall:every=60,lenght=2", "unknown key 'lenght' for stall (keys: every, start, duration)"},
       {"stall:every=abc", "every is not a number: 'abc'"},
@@ -299,6 +301,84 @@ TEST(FaultInjection, RotationScaleAndHeadingDriftTurnAsStated) {
     ++compared;
   }
   EXPECT_GT(compared, lasers.size() / 2);
+}
+
+// Random odometry error: zero changes nothing; the error after a stretch of driving has the stated
+// spread over seeds (a random walk: sigma sqrt(L)), whatever the sampling; standing still gets
+// none; both chains get the same error; the same seed gives the same log.
+TEST(FaultInjection, OdomNoiseIsARandomWalkInTheMotion) {
+  EXPECT_EQ(laser_odometry(perturbed("odom-noise:translation=0,heading=0,rotation=0")), laser_odometry(office()));
+  const std::vector<SE2> before = laser_odometry(office());
+  const double length = path_length(before);
+  ASSERT_GT(length, 50.0);
+  // Along-track only: the path length changes by W_t(L), spread translation * sqrt(L) over seeds;
+  // the headings stay as logged.
+  double sum = 0.0, sum_squares = 0.0;
+  constexpr int kSeeds = 200;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    const std::vector<SE2> after = laser_odometry(perturbed("odom-noise:translation=0.1,heading=0,rotation=0", seed));
+    ASSERT_EQ(after.size(), before.size());
+    // signed: the along-track error of each increment adds up (every increment moves forward here)
+    double signed_length = 0.0;
+    for (std::size_t i = 1; i < after.size(); ++i) {
+      const SE2 a = after[i - 1].between(after[i]), b = before[i - 1].between(before[i]);
+      signed_length += b.translation().norm() > 0.0 ? a.translation().dot(b.translation()) / b.translation().norm() : 0.0;
+      EXPECT_NEAR(a.theta(), b.theta(), 1e-9);
+    }
+    const double error = signed_length - length;
+    sum += error;
+    sum_squares += error * error;
+  }
+  const double mean = sum / kSeeds, sigma = std::sqrt(sum_squares / kSeeds - mean * mean);
+  const double expected = 0.1 * std::sqrt(length);
+  EXPECT_NEAR(sigma, expected, 0.15 * expected);  // 200 draws: the spread's own error is 5 %
+  EXPECT_NEAR(mean, 0.0, 4.0 * expected / std::sqrt(kSeeds));
+  // Heading from turning: total heading error W_r(sum |dtheta|), spread rotation * sqrt(turned).
+  double turned_abs = 0.0;
+  for (const double turn : turns(before)) turned_abs += std::abs(turn);
+  sum = sum_squares = 0.0;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    const double error = turned(laser_odometry(perturbed("odom-noise:translation=0,heading=0,rotation=0.05", seed))) - turned(before);
+    sum += error;
+    sum_squares += error * error;
+  }
+  const double turn_sigma = std::sqrt(sum_squares / kSeeds - (sum / kSeeds) * (sum / kSeeds));
+  EXPECT_NEAR(turn_sigma, 0.05 * std::sqrt(turned_abs), 0.15 * 0.05 * std::sqrt(turned_abs));
+  // Standing still gets no error: a robot that stops (laser lines 50-79 at one pose) stays put.
+  Messages stopping = office();
+  std::size_t k = 0;
+  for (SensorMessage& message : stopping) {  // TRUEPOS lines belong to the laser chain too
+    if (auto* truth = std::get_if<TruePoseMessage>(&message); truth != nullptr && k > 50 && k < 80) truth->odom_pose = before[50];
+    auto* laser = std::get_if<LaserMessage>(&message);
+    if (laser == nullptr) continue;
+    if (k >= 50 && k < 80) laser->odom_pose = laser->laser_pose = before[50];
+    ++k;
+  }
+  const std::vector<SE2> stopped = laser_odometry(perturbed("odom-noise:translation=0.2,heading=0.1,rotation=0.2", 1, stopping));
+  EXPECT_FALSE(stopped[50] == before[50]);  // the noise before the stop moved it
+  for (std::size_t i = 51; i < 80; ++i) EXPECT_TRUE(stopped[i] == stopped[50]) << i;
+  const std::vector<SE2> noisy = laser_odometry(perturbed("odom-noise:translation=0.2,heading=0.1,rotation=0.2"));
+  // The same seed gives the same log; another seed another.
+  EXPECT_EQ(noisy, laser_odometry(perturbed("odom-noise:translation=0.2,heading=0.1,rotation=0.2")));
+  EXPECT_NE(noisy, laser_odometry(perturbed("odom-noise:translation=0.2,heading=0.1,rotation=0.2", 2)));
+  // Laser and ODOM chains agree where they sample the same instant.
+  const Messages log = perturbed("odom-noise:translation=0.2,heading=0.1,rotation=0.2");
+  const auto lasers = of_type<LaserMessage>(log);
+  const auto odoms = of_type<OdometryMessage>(log);
+  std::size_t compared = 0;
+  double largest_change = 0.0;
+  for (std::size_t k = 0; k < lasers.size(); ++k) {
+    const LaserMessage& laser = lasers[k];
+    largest_change = std::max(largest_change, (laser.odom_pose.translation() - before[k].translation()).norm());
+    const auto odom = std::find_if(odoms.begin(), odoms.end(), [&](const OdometryMessage& o) {
+      return std::abs(o.reading.stamp - laser.scan.stamp) < 1e-9;
+    });
+    if (odom == odoms.end()) continue;
+    EXPECT_TRUE(odom->reading.pose.is_approx(laser.odom_pose, 0.02)) << laser.scan.stamp;
+    ++compared;
+  }
+  EXPECT_GT(compared, lasers.size() / 2);
+  EXPECT_GT(largest_change, 0.5);  // the noise is not negligible against the tolerance above
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -148,6 +148,13 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
       {"heading-drift", [](SpecArguments& a) -> Fault {
          return HeadingDriftFault{a.number("rate", HeadingDriftFault{}.rate_deg_per_m, {-90.0, 90.0})};
        }},
+      {"odom-noise", [](SpecArguments& a) -> Fault {
+         OdomNoiseFault f;
+         f.translation = a.number("translation", f.translation, {0.0, 10.0});
+         f.heading = a.number("heading", f.heading, {0.0, 10.0});
+         f.rotation = a.number("rotation", f.rotation, {0.0, 10.0});
+         return f;
+       }},
       {"scan-gap", [](SpecArguments& a) -> Fault { return ScanGapFault{parse_windows(a)}; }},
       {"decimate", [](SpecArguments& a) -> Fault { return DecimateFault{a.count("k", DecimateFault{}.k, 1)}; }},
       {"jitter", [](SpecArguments& a) -> Fault { return JitterFault{a.number("sigma", JitterFault{}.sigma, {0.0, 60.0})}; }},
@@ -192,6 +199,9 @@ Parameters parameters(const WheelScaleFault& f) {
   return {"wheel-scale", {{"translation", f.translation}, {"rotation", f.rotation}}};
 }
 Parameters parameters(const HeadingDriftFault& f) { return {"heading-drift", {{"rate", f.rate_deg_per_m}}}; }
+Parameters parameters(const OdomNoiseFault& f) {
+  return {"odom-noise", {{"translation", f.translation}, {"heading", f.heading}, {"rotation", f.rotation}}};
+}
 Parameters parameters(const ScanGapFault& f) { return {"scan-gap", window_parameters(f.windows)}; }
 Parameters parameters(const DecimateFault& f) { return {"decimate", {{"k", as_number(f.k)}}}; }
 Parameters parameters(const JitterFault& f) { return {"jitter", {{"sigma", f.sigma}}}; }
@@ -442,6 +452,97 @@ Changes apply(const HeadingDriftFault& fault, Messages& messages, Rng&) {
   return reintegrate_with_report(messages, [rate](const SE2& increment) {
     return SE2(increment.translation(), increment.theta() + rate * increment.x());
   });
+}
+
+// A Brownian motion W(s), s >= 0: W(0) = 0, W(s + step) - W(s) ~ N(0, sigma^2 step), linear
+// between the samples. The samples are drawn in order of s, however W is asked, so every query
+// of the same s gives the same value.
+class RandomWalk {
+ public:
+  RandomWalk(Rng rng, double sigma, double step) : rng_(std::move(rng)), sigma_step_(sigma * std::sqrt(step)), step_(step) {}
+
+  double operator()(double s) {
+    const double position = s / step_;
+    const auto i = static_cast<std::size_t>(position);
+    while (samples_.size() < i + 2) samples_.push_back(samples_.back() + sigma_step_ * rng_.gaussian());
+    const double fraction = position - static_cast<double>(i);
+    return samples_[i] + fraction * (samples_[i + 1] - samples_[i]);
+  }
+
+ private:
+  Rng rng_;
+  double sigma_step_;
+  double step_;
+  std::vector<double> samples_{0.0};
+};
+
+// The leading chain (the laser chain; the ODOM chain when no laser line carries odometry, as in a
+// bag) is re-integrated (Eq. 1) with noisy increments: the increment from s to s + d travelled
+// (and r to r + |dtheta| turned) gets the along-track error W_t(s + d) - W_t(s) and the heading
+// error W_h(s + d) - W_h(s) + W_r(r + |dtheta|) - W_r(r). Every other odometry pose T gets the
+// correction C T, with C = T' T^-1 of the leading chain's message nearest in stamp among the one
+// before and the one after it in file order: the chains stay one odometry.
+Changes apply(const OdomNoiseFault& fault, Messages& messages, Rng& rng) {
+  if (fault.translation == 0.0 && fault.heading == 0.0 && fault.rotation == 0.0) return reintegrate_with_report(messages, nullptr);
+  const double length_before = laser_path_length(messages);
+  const bool has_laser_chain =
+      std::any_of(messages.begin(), messages.end(), [](const SensorMessage& m) { return chain_of(m) == kLaserChain; });
+  const Chain leader = has_laser_chain ? kLaserChain : kOdomChain;
+  constexpr double kStep = 0.01;  // m and rad between the walks' samples
+  RandomWalk along(rng.split(0), fault.translation, kStep);
+  RandomWalk heading(rng.split(1), fault.heading, kStep);
+  RandomWalk turning(rng.split(2), fault.rotation, kStep);
+  // Pass 1: the leading chain, and its corrections C = T' T^-1 by message index.
+  std::vector<std::pair<std::size_t, SE2>> corrections;
+  std::optional<SE2> previous_original, previous_new;
+  double travelled = 0.0, turned = 0.0;  // m, rad
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (chain_of(messages[i]) != leader) continue;
+    const SE2 pose = odometry_pose(messages[i]);
+    if (!previous_original) {
+      previous_new = pose;
+    } else {
+      const SE2 increment = previous_original->between(pose);
+      const double d = increment.translation().norm();
+      const double s = travelled, r = turned;
+      travelled += d;
+      turned += std::abs(increment.theta());
+      const double error_along = along(travelled) - along(s);
+      const double error_heading = heading(travelled) - heading(s) + turning(turned) - turning(r);
+      const Eigen::Vector2d t = d > 0.0 ? Eigen::Vector2d((1.0 + error_along / d) * increment.translation()) : increment.translation();
+      previous_new = *previous_new * SE2(t, increment.theta() + error_heading);
+    }
+    previous_original = pose;
+    corrections.emplace_back(i, *previous_new * pose.inverse());
+  }
+  // Pass 2: every odometry pose gets its correction.
+  std::size_t changed = 0;
+  std::size_t next = 0;  // the first leading message at or after i
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (!chain_of(messages[i]) || corrections.empty()) continue;
+    while (next < corrections.size() && corrections[next].first < i) ++next;
+    const SE2 pose = odometry_pose(messages[i]);
+    SE2 correction;
+    if (next < corrections.size() && corrections[next].first == i) {
+      correction = corrections[next].second;
+    } else if (next == 0) {
+      correction = corrections.front().second;
+    } else if (next == corrections.size()) {
+      correction = corrections.back().second;
+    } else {
+      const double stamp = stamp_of(messages[i]);
+      const double before = std::abs(stamp - stamp_of(messages[corrections[next - 1].first]));
+      const double after = std::abs(stamp_of(messages[corrections[next].first]) - stamp);
+      correction = (after < before ? corrections[next] : corrections[next - 1]).second;
+    }
+    const SE2 new_pose = correction * pose;
+    if (new_pose == pose) continue;
+    set_odometry_pose(messages[i], new_pose);
+    ++changed;
+  }
+  return {{"odometry_poses_changed", static_cast<double>(changed)},
+          {"laser_path_length_before_m", length_before},
+          {"laser_path_length_after_m", laser_path_length(messages)}};
 }
 
 // ---------------------------------------------------------------------------------------------

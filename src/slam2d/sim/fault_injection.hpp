@@ -72,6 +72,19 @@ struct WheelScaleFault {
 struct HeadingDriftFault {
   double rate_deg_per_m = 0.5;  // deg per metre travelled forward, |rate| <= 90
 };
+/// Random odometry error, the noise Gutmann et al. (IROS 1998) added to the odometry to compare
+/// localizers: each increment's translation is lengthened or shortened and its heading turned by
+/// Gaussian noise whose variance grows with the motion, a random walk in the distance travelled
+/// and the angle turned (so the error after L m has standard deviation translation * sqrt(L),
+/// however often the log samples the odometry). The laser chain (the ODOM chain in a log whose
+/// laser lines carry no odometry) is re-integrated with the noisy increments (Eq. 1); the other
+/// chain gets the same correction (T' T^-1 of the nearest laser line), so both stay one odometry.
+/// All zero changes nothing. A robot standing still gets no error.
+struct OdomNoiseFault {
+  double translation = 0.05;  // m per sqrt(m) travelled: along-track error, in [0, 10]
+  double heading = 0.02;      // rad per sqrt(m) travelled: heading error from driving, in [0, 10]
+  double rotation = 0.05;     // rad per sqrt(rad) turned: heading error from turning, in [0, 10]
+};
 /// Scan dropouts: every laser line in each window is removed (odometry kept).
 struct ScanGapFault {
   FaultWindows windows;
@@ -120,7 +133,7 @@ struct RangeMaxFault {
   double max = 30.0;  // m, > 0 and at most the log's maximum range
 };
 
-using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, ScanGapFault,
+using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, OdomNoiseFault, ScanGapFault,
                            DecimateFault, JitterFault, DuplicateFault, BackwardsFault, RangeNoiseFault,
                            SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault>;
 
