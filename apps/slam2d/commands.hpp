@@ -14,6 +14,7 @@ void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_odometry_command(CLI::App& app);
 void add_match_bench_command(CLI::App& app);
+void add_match_command(CLI::App& app);
 void add_optimize_command(CLI::App& app);
 void add_localize_command(CLI::App& app);
 void add_perturb_command(CLI::App& app);

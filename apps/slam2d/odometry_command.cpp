@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // slam2d odometry LOG --matcher NAME --out TRAJ: scan-to-scan odometry over a whole log with any
-// matcher (registration/scan_odometry.hpp), one trajectory line per front-laser scan.
+// matcher (registration/scan_odometry.hpp), one trajectory line per front-laser scan; with
+// --covariance-csv FILE also each scan's match: its covariance and degeneracy (match_report.hpp).
 
 #include <fmt/core.h>
 
@@ -11,12 +12,15 @@
 
 #include "commands.hpp"
 #include "json.hpp"
+#include "match_report.hpp"
 #include "odometry_report.hpp"
 #include "progress.hpp"
 #include "run_stats.hpp"
 #include "sensor_options.hpp"
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/eval/statistics.hpp"
+#include "slam2d/io/atomic_file.hpp"
 #include "slam2d/io/log_reader.hpp"
 #include "slam2d/io/config_file.hpp"
 #include "slam2d/io/trajectory_io.hpp"
@@ -31,6 +35,7 @@ struct OdometryOptions {
   std::string matcher = "pl-icp";
   std::string config;  // a preset .yaml for the matcher
   std::string out;
+  std::string covariance_csv;  // per-scan covariance and degeneracy; empty: none
   std::string trajectory_format = "text";  // text | tum
   std::optional<double> keyframe;            // m; 0: match every scan against the previous one
   std::optional<double> keyframe_angle_deg;  // deg
@@ -58,16 +63,72 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
   return config;
 }
 
+// What the matches of a run said about their certainty: the --covariance-csv rows and the figures
+// of the summary (over the matches that passed the gate; degenerate ones over every match).
+class CovarianceRecord {
+ public:
+  explicit CovarianceRecord(bool enabled) : enabled_(enabled) {
+    if (enabled_) csv_ = covariance_csv_header();
+  }
+
+  void add(const ScanOdometry& odometry, const LaserScan& scan) {
+    if (!enabled_) return;
+    const std::size_t index = odometry.stats().scans - 1;
+    if (index == 0) {
+      csv_ += covariance_csv_row(index, scan.stamp, "first", nullptr);
+      return;
+    }
+    if (!odometry.last_matched()) {
+      csv_ += covariance_csv_row(index, scan.stamp, "too_few_points", nullptr);
+      return;
+    }
+    const MatchResult match =
+        match_between_robots(odometry.last_match(), odometry.last_target_T_robot_sensor(), scan.T_robot_sensor);
+    csv_ += covariance_csv_row(index, scan.stamp, odometry.last_accepted() ? "matched" : "failed", &match);
+    if (match.degenerate) ++degenerate_;
+    if (odometry.last_accepted()) {
+      trans_sigmas_.push_back(translation_sigma(match.covariance));
+      rot_sigmas_deg_.push_back(rad_to_deg(rotation_sigma(match.covariance)));
+    }
+  }
+
+  void write(const std::string& path) const {
+    const std::filesystem::path out(path);
+    if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
+    write_file_atomically(path, csv_);
+  }
+
+  JsonObject summary(const std::string& path) const {
+    JsonObject json;
+    const auto stat = [](const std::vector<double>& values, double p) {
+      return values.empty() ? std::nullopt : std::optional<double>(percentile(values, p));
+    };
+    json.add("covariance_csv", path).add("degenerate_scans", degenerate_);
+    json.add("sigma_trans_median_m", stat(trans_sigmas_, 50)).add("sigma_trans_p95_m", stat(trans_sigmas_, 95));
+    json.add("sigma_theta_median_deg", stat(rot_sigmas_deg_, 50)).add("sigma_theta_p95_deg", stat(rot_sigmas_deg_, 95));
+    return json;
+  }
+
+ private:
+  bool enabled_;
+  std::string csv_;
+  std::size_t degenerate_ = 0;
+  std::vector<double> trans_sigmas_;    // m
+  std::vector<double> rot_sigmas_deg_;  // deg
+};
+
 void run_odometry(const OdometryOptions& options) {
   ScanOdometry odometry(configured_matcher(options), odometry_config(options));
   const RunClock clock;
   LogReader reader(options.log, options.input);
   Progress progress("odometry", options.quiet);
+  CovarianceRecord covariance(!options.covariance_csv.empty());
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
     const bool use_odometry = laser->has_poses && !options.no_odometry;
     odometry.add(laser->scan, use_odometry ? std::optional<SE2>(laser->odom_pose) : std::nullopt);
+    covariance.add(odometry, laser->scan);
     if (odometry.stats().scans % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans, {} failures", odometry.stats().scans, odometry.stats().failures));
     }
@@ -80,6 +141,7 @@ void run_odometry(const OdometryOptions& options) {
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   write_trajectory(options.out, trajectory, trajectory_format_from_name(options.trajectory_format));
+  if (!options.covariance_csv.empty()) covariance.write(options.covariance_csv);
 
   const ScanOdometryStats& stats = odometry.stats();
   const double matches = static_cast<double>(std::max<std::size_t>(stats.matches, 1));
@@ -92,6 +154,7 @@ void run_odometry(const OdometryOptions& options) {
   summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
   summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
   summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
+  if (!options.covariance_csv.empty()) summary.merge(covariance.summary(options.covariance_csv));
   std::vector<std::string> warnings = reader_warnings(reader);
   if (!options.no_odometry) {
     summary.merge(odometry_report(odometry.odometry_stats()));
@@ -112,6 +175,9 @@ void add_odometry_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--config", options->config, "Matcher preset (.yaml, e.g. configs/pl-icp.yaml)");
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
+  command->add_option("--covariance-csv", options->covariance_csv,
+                      "CSV, one row per scan: its match against the keyframe (pose, covariance, degeneracy and its "
+                      "measure, in the keyframe's robot frame)");
   command->add_option("--keyframe", options->keyframe,
                       "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
   command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");

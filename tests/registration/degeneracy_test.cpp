@@ -65,6 +65,20 @@ TEST(Degeneracy, TooFewPairsIsDegenerate) {
   EXPECT_TRUE(analysis.degenerate);
 }
 
+TEST(Degeneracy, ApplyCopiesTheEigenvaluesBehindTheVerdict) {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  information.diagonal() << 1e-3, 4e4, 9e4;  // nothing along x
+  const DegeneracyAnalysis analysis = analyze_information(information, 2.0);
+  MatchResult result;
+  EXPECT_TRUE(result.information_eigenvalues.array().isNaN().all());  // no analysis yet
+  result.covariance = Covariance3::Identity() * 1e-4;
+  apply(analysis, result);
+  EXPECT_TRUE(result.degenerate);
+  EXPECT_EQ(result.information_eigenvalues, analysis.eigenvalues);
+  EXPECT_NEAR(result.information_eigenvalues.x(), 1e-3, 1e-9);
+  EXPECT_NEAR(result.information_eigenvalues.z(), 4e4, 1e-6);  // 9e4 / L^2 for rotation
+}
+
 TEST(Degeneracy, InformationDecompositionScalesRotationByLength) {
   // Information 1/m^2 in x and y and 4/rad^2 in theta, at L = 2 m: theta' = 2 theta carries 1/m^2.
   const Eigen::Matrix3d information = Eigen::Vector3d(1.0, 1.0, 4.0).asDiagonal();

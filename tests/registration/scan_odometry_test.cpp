@@ -147,6 +147,60 @@ TEST(ScanOdometry, ScanWithoutPointsIsNotMatched) {
   EXPECT_EQ(odometry.stats().failures, 1u);
 }
 
+TEST(ScanOdometry, RemembersWhichScansWereMatchedAndAgainstWhichMount) {
+  const SE2 first_mount(0.2, 0.0, 0.1), second_mount(0.1, 0.05, -0.2);
+  ScanOdometry odometry([](const PointCloud2&, const PointCloud2&, const SE2& guess) { return accepted(guess); });
+  odometry.add(flat_scan(0.0, first_mount), SE2());
+  EXPECT_FALSE(odometry.last_matched());  // the first scan has no keyframe to match
+  odometry.add(flat_scan(1.0, second_mount), SE2(0.2, 0.0, 0.0));  // 0.2 m/s: trusted, a new keyframe
+  EXPECT_TRUE(odometry.last_matched());
+  EXPECT_TRUE(test::poses_near(odometry.last_target_T_robot_sensor(), first_mount, 0.0, 0.0));
+  LaserScan empty = flat_scan(2.0, first_mount);
+  empty.ranges.assign(31, 30.0);  // all no-return
+  odometry.add(empty, SE2(0.25, 0.0, 0.0));  // not matched, not far enough for a keyframe
+  EXPECT_FALSE(odometry.last_matched());
+  odometry.add(flat_scan(3.0, first_mount), SE2(0.4, 0.0, 0.0));
+  EXPECT_TRUE(odometry.last_matched());
+  EXPECT_TRUE(test::poses_near(odometry.last_target_T_robot_sensor(), second_mount, 0.0, 0.0));  // scan 1, the keyframe
+}
+
+// (x, y, theta) of A * T * C for a perturbed T, to differentiate numerically.
+Eigen::Vector3d between_robots_vector(const SE2& A, const Eigen::Vector3d& t, const SE2& C) {
+  const SE2 moved = A * SE2(t.x(), t.y(), t.z()) * C;
+  return {moved.x(), moved.y(), moved.theta()};
+}
+
+TEST(ScanOdometry, MatchBetweenRobotsPropagatesTheCovarianceThroughTheMounts) {
+  const SE2 T_robot_target_sensor(0.3, -0.1, 0.4), T_robot_source_sensor(-0.2, 0.15, -0.3);
+  MatchResult match = accepted(SE2(0.5, 0.2, 0.3));
+  Eigen::Matrix3d L;
+  L << 0.02, 0, 0, 0.005, 0.01, 0, -0.003, 0.002, 0.008;
+  match.covariance = L * L.transpose();
+  match.weak_direction = Eigen::Vector3d(0.0, 0.0, 1.0);
+  const MatchResult moved = match_between_robots(match, T_robot_target_sensor, T_robot_source_sensor);
+  EXPECT_TRUE(test::poses_near(moved.T_target_source,
+                               T_robot_target_sensor * match.T_target_source * T_robot_source_sensor.inverse(), 1e-12,
+                               1e-12));
+  // J by central differences.
+  const Eigen::Vector3d t(0.5, 0.2, 0.3);
+  Eigen::Matrix3d J;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d h = 1e-6 * Eigen::Vector3d::Unit(k);
+    J.col(k) = (between_robots_vector(T_robot_target_sensor, t + h, T_robot_source_sensor.inverse()) -
+                between_robots_vector(T_robot_target_sensor, t - h, T_robot_source_sensor.inverse())) / 2e-6;
+  }
+  const Eigen::Matrix3d expected = J * match.covariance * J.transpose();
+  EXPECT_LT((moved.covariance - expected).norm(), 1e-9 * expected.norm()) << moved.covariance << "\n" << expected;
+  // A rotation about the sensor moves the robot too (the lever arm): the weak direction follows.
+  EXPECT_NEAR((moved.weak_direction - (J.col(2) / J.col(2).norm())).norm(), 0.0, 1e-9);
+  // Unmounted sensors change nothing; an unknown covariance stays unknown.
+  const MatchResult same = match_between_robots(match, SE2(), SE2());
+  EXPECT_LT((same.covariance - match.covariance).norm(), 1e-15);
+  EXPECT_TRUE(test::poses_near(same.T_target_source, match.T_target_source, 1e-15, 1e-15));
+  match.covariance = unknown_covariance();
+  EXPECT_EQ(match_between_robots(match, T_robot_target_sensor, T_robot_source_sensor).covariance, unknown_covariance());
+}
+
 TEST(ScanOdometry, InvalidSettingsThrow) {
   const Matcher echo = [](const PointCloud2&, const PointCloud2&, const SE2& guess) { return accepted(guess); };
   EXPECT_THROW(ScanOdometry(Matcher{}), Error);

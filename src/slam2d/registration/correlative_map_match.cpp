@@ -64,6 +64,7 @@ MatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, 
   result.covariance = floored(coarse.covariance, config);
   result.degenerate = coarse.degenerate;
   result.weak_direction = coarse.weak_direction;
+  result.information_eigenvalues = coarse.information_eigenvalues;
   if (config.refine) {
     const MatchResult fine =
         match_point_to_plane(map.grid.tree(), map.cloud, scan, coarse.T_target_source, config.refinement);

@@ -99,6 +99,7 @@ DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointClou
 void apply(const DegeneracyAnalysis& analysis, MatchResult& result) {
   result.degenerate = analysis.degenerate;
   result.weak_direction = analysis.weak_direction;
+  result.information_eigenvalues = analysis.eigenvalues;
   if (!analysis.degenerate) return;
   // A closed-form covariance from sampled walls pins even an unobservable direction a little
   // (noisy normals lend it information). Along the weak direction w the variance is raised to at

@@ -54,7 +54,7 @@ DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointClou
 DegeneracyAnalysis analyze_information(const Eigen::Matrix3d& information, double length_scale,
                                        const DegeneracyConfig& config = {});
 
-/// Copies the verdict into a result (degenerate, weak_direction) and, when degenerate, raises the
+/// Copies the verdict into a result (degenerate, weak_direction, information_eigenvalues) and, when degenerate, raises the
 /// result's variance along the weak direction w to at least the Cramer-Rao bound 1 / (w^T I w)
 /// and at least the variance along the strongest direction times the eigenvalue ratio (1e6 when
 /// w carries no information).

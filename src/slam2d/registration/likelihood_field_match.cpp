@@ -106,6 +106,7 @@ MatchResult match_likelihood_field(const LikelihoodField& field, const std::vect
       analyze_information(eq.H, std::sqrt(squared_radius / static_cast<double>(points_robot.size())), config.degeneracy);
   result.degenerate = analysis.degenerate;
   result.weak_direction = analysis.weak_direction;
+  result.information_eigenvalues = analysis.eigenvalues;
   return result;
 }
 

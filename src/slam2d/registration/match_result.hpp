@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <functional>
+#include <limits>
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/point_cloud.hpp"
@@ -27,6 +28,10 @@ struct MatchResult {
   double residual = 0.0;        // m, RMS of the inlier residuals at the estimate (search methods: see their header)
   bool degenerate = false;      // the scene does not constrain every direction (degeneracy.hpp)
   Eigen::Vector3d weak_direction = Eigen::Vector3d::Zero();  // (x, y, theta), unit; the least constrained direction
+  // The eigenvalues behind `degenerate` (degeneracy.hpp), ascending, of the information with rotation
+  // scaled to arc length (1/m^2): their ratio smallest / largest is the degeneracy measure. NaN when
+  // the matcher made no such analysis.
+  Eigen::Vector3d information_eigenvalues = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   // Map matchers (scan to map; 0 from the scan-to-scan matchers):
   double inlier_fraction = 0.0; // 1, in [0, 1]: inliers / the points offered (the matcher's own inlier test)
   double score = 0.0;           // 1, in [0, 1]: a search method's response at its best pose (correlative: the

@@ -18,6 +18,23 @@ void validate(const ScanOdometryConfig& config) {
   check(config.max_range > config.min_range, "ScanOdometryConfig: max_range must be > min_range");
 }
 
+MatchResult match_between_robots(const MatchResult& match, const SE2& T_robot_target_sensor,
+                                 const SE2& T_robot_source_sensor) {
+  const SE2 C = T_robot_source_sensor.inverse();
+  MatchResult moved = match;
+  moved.T_target_source = T_robot_target_sensor * match.T_target_source * C;
+  // (x, y) = t_A + R_A (t_T + R_T t_C), theta = theta_A + theta_T + theta_C.
+  const Eigen::Matrix2d R_A = T_robot_target_sensor.rotation();
+  const Point2 lever = match.T_target_source.rotation() * C.translation();
+  Matrix3 J = Matrix3::Identity();
+  J.topLeftCorner<2, 2>() = R_A;
+  J.topRightCorner<2, 1>() = R_A * Point2(-lever.y(), lever.x());
+  if (match.covariance.diagonal().minCoeff() < kUnknownVariance) moved.covariance = propagate(match.covariance, J);
+  const Eigen::Vector3d weak = J * match.weak_direction;
+  if (weak.norm() > 0.0) moved.weak_direction = weak.normalized();
+  return moved;
+}
+
 ScanOdometry::ScanOdometry(Matcher matcher, const ScanOdometryConfig& config)
     : matcher_(std::move(matcher)), config_(config), odometry_guard_(config.odometry_guard) {
   check(static_cast<bool>(matcher_), "scan odometry: no matcher given");
@@ -98,7 +115,9 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   const SE2 guess = predict(scan.stamp, guarded);  // T_keyframe_robot
   SE2 T_keyframe_robot = guess;
   last_accepted_ = false;
-  if (cloud.size() >= 3) {
+  last_matched_ = cloud.size() >= 3;
+  if (last_matched_) {
+    last_target_T_robot_sensor_ = keyframe_->T_robot_sensor;
     const SE2 guess_sensor = keyframe_->T_robot_sensor.inverse() * guess * scan.T_robot_sensor;
     const auto start = std::chrono::steady_clock::now();
     last_match_ = matcher_(keyframe_->cloud, cloud, guess_sensor);

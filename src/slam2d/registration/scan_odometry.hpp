@@ -86,6 +86,13 @@ struct ScanOdometryStats {
   double matcher_seconds = 0.0;    // s, wall time spent inside the matcher
 };
 
+/// A scan-to-scan match moved from the sensor frames into the robots' frames:
+///   T_target_source' = T_robot_target_sensor * T_target_source * T_robot_source_sensor^-1,
+/// its covariance propagated to first order (J cov J^T, J the derivative of (x, y, theta) of that
+/// product by those of T_target_source) and its weak direction mapped by J. The rest is kept.
+MatchResult match_between_robots(const MatchResult& match, const SE2& T_robot_target_sensor,
+                                 const SE2& T_robot_source_sensor);
+
 class ScanOdometry {
  public:
   /// Throws Error for an empty matcher or an invalid config.
@@ -99,6 +106,10 @@ class ScanOdometry {
   const ScanOdometryStats& stats() const { return stats_; }
   const MatchResult& last_match() const { return last_match_; }  // of the last matched scan
   bool last_accepted() const { return last_accepted_; }          // whether the last scan's match passed the gate
+  bool last_matched() const { return last_matched_; }  // whether the matcher ran for the last scan added
+  /// T_robot_sensor of the keyframe the last matched scan was matched against (the match's target):
+  /// with it, match_between_robots(last_match(), ..., scan.T_robot_sensor) is the keyframe-to-scan estimate.
+  const SE2& last_target_T_robot_sensor() const { return last_target_T_robot_sensor_; }
   const ScanOdometryConfig& config() const { return config_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
 
@@ -132,6 +143,8 @@ class ScanOdometry {
   ScanOdometryStats stats_;
   MatchResult last_match_;
   bool last_accepted_ = false;
+  bool last_matched_ = false;
+  SE2 last_target_T_robot_sensor_;
 };
 
 }  // namespace slam2d
