@@ -90,6 +90,7 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
   EXPECT_EQ(fault_spec(parse_fault("stall:duration=3,start=0")), "stall:every=60,start=0,duration=3");
   EXPECT_EQ(fault_spec(parse_fault("wheel-scale")), "wheel-scale:translation=1.05,rotation=1");
   EXPECT_EQ(fault_spec(parse_fault("range-max:max=5.6")), "range-max:max=5.6");
+  EXPECT_EQ(fault_spec(parse_fault("repeat:times=10")), "repeat:times=10");
   EXPECT_EQ(std::get<BeamsFault>(parse_fault("beams:k=3")).k, 3u);
   EXPECT_EQ(std::get<HeadingDriftFault>(parse_fault("heading-drift:rate=-0.25")).rate_deg_per_m, -0.25);
   for (const std::string& kind : fault_kinds()) {  // every kind parses with its defaults and round-trips
@@ -97,7 +98,7 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
     EXPECT_EQ(spec.rfind(kind + ":", 0), 0u) << spec;
     EXPECT_EQ(fault_spec(parse_fault(spec)), spec);
   }
-  EXPECT_EQ(fault_kinds().size(), 17u);
+  EXPECT_EQ(fault_kinds().size(), 18u);
   EXPECT_EQ(fault_spec(parse_fault("odom-noise")), "odom-noise:translation=0.05,heading=0.02,rotation=0.05");
   EXPECT_EQ(fault_spec(parse_fault("odom-reset:every=30")), "odom-reset:every=30,start=30");
 }
@@ -601,6 +602,48 @@ TEST(CarmenLog, RefusesAGeometryPARAMLinesCannotDeclare) {
   std::get<LaserMessage>(messages[1]).scan.angle_min += 0.1;
   EXPECT_THROW(write_carmen_log(dir.file("bad.clf"), {}, messages), Error);
   EXPECT_FALSE(std::filesystem::exists(dir.file("bad.clf")));
+}
+
+}  // namespace
+}  // namespace slam2d
+
+namespace slam2d {
+namespace {
+
+TEST(FaultInjection, RepeatPlaysTheLogAgainAfterItsEnd) {
+  const Messages& log = office();
+  Messages messages = log;
+  const FaultReport report = report_of("repeat:times=3", messages);
+  ASSERT_EQ(messages.size(), 3 * log.size());
+  EXPECT_EQ(change(report, "copies"), 3.0);
+  const double period = change(report, "period_s");
+  const double duration = stamp_of(log.back()) - stamp_of(log.front());
+  EXPECT_GT(period, duration);
+  EXPECT_LT(period, duration + 1.0);
+  for (std::size_t copy = 1; copy < 3; ++copy) {
+    for (std::size_t i = 0; i < log.size(); i += 97) {
+      const SensorMessage& again = messages[copy * log.size() + i];
+      EXPECT_NEAR(stamp_of(again), stamp_of(log[i]) + static_cast<double>(copy) * period, 1e-6) << i;
+      EXPECT_EQ(again.index(), log[i].index());
+      if (const auto* laser = std::get_if<LaserMessage>(&again)) {
+        EXPECT_EQ(laser->scan.ranges, std::get<LaserMessage>(log[i]).scan.ranges);
+        EXPECT_TRUE(laser->odom_pose.is_approx(std::get<LaserMessage>(log[i]).odom_pose, 0.0));
+      }
+    }
+  }
+  // Laser stamps still increase across the seams.
+  double previous = -1e300;
+  for (const SensorMessage& message : messages) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+      EXPECT_GT(laser->scan.stamp, previous);
+      previous = laser->scan.stamp;
+    }
+  }
+  Messages once = log;
+  report_of("repeat:times=1", once);
+  EXPECT_EQ(once.size(), log.size());
+  EXPECT_THROW(parse_fault("repeat:times=0"), Error);
+  EXPECT_THROW(parse_fault("repeat:times=1001"), Error);
 }
 
 }  // namespace

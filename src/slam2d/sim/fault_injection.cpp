@@ -180,6 +180,11 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
       {"beams", [](SpecArguments& a) -> Fault { return BeamsFault{a.count("k", BeamsFault{}.k, 1)}; }},
       {"fov", [](SpecArguments& a) -> Fault { return FovFault{a.number("deg", FovFault{}.deg, {0.0, 360.0, true})}; }},
       {"range-max", [](SpecArguments& a) -> Fault { return RangeMaxFault{a.number("max", RangeMaxFault{}.max, kPositive)}; }},
+      {"repeat", [](SpecArguments& a) -> Fault {
+         const RepeatFault f{a.count("times", RepeatFault{}.times, 1)};
+         if (f.times > 1000) a.fail("times must be at most 1000");
+         return f;
+       }},
   };
   return table;
 }
@@ -215,6 +220,7 @@ Parameters parameters(const SpuriousShortFault& f) {
 Parameters parameters(const BeamsFault& f) { return {"beams", {{"k", as_number(f.k)}}}; }
 Parameters parameters(const FovFault& f) { return {"fov", {{"deg", f.deg}}}; }
 Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.max}}}; }
+Parameters parameters(const RepeatFault& f) { return {"repeat", {{"times", as_number(f.times)}}}; }
 
 // ---------------------------------------------------------------------------------------------
 // Messages: stamps, odometry chains, laser lines.
@@ -732,6 +738,52 @@ Changes apply(const RangeMaxFault& fault, Messages& messages, Rng&) {
   });
   for_each_laser(messages, [&](LaserMessage& laser) { laser.scan.range_max = fault.max; });
   return changes;
+}
+
+void shift_stamp(SensorMessage& message, double by) {
+  struct Shift {
+    double by;
+    void operator()(LaserMessage& m) const { m.scan.stamp += by; }
+    void operator()(OdometryMessage& m) const { m.reading.stamp += by; }
+    void operator()(TruePoseMessage& m) const { m.stamp += by; }
+    void operator()(ImuMessage& m) const { m.reading.stamp += by; }
+  };
+  std::visit(Shift{by}, message);
+}
+
+// The median gap between consecutive laser stamps (0.1 s without two scans).
+double median_laser_period(const Messages& messages) {
+  std::vector<double> gaps;
+  std::optional<double> previous;
+  for (const SensorMessage& message : messages) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+      if (previous && laser->scan.stamp > *previous) gaps.push_back(laser->scan.stamp - *previous);
+      previous = laser->scan.stamp;
+    }
+  }
+  if (gaps.empty()) return 0.1;
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  return gaps[gaps.size() / 2];
+}
+
+Changes apply(const RepeatFault& fault, Messages& messages, Rng&) {
+  if (messages.empty() || fault.times == 1) return {{"copies", 1.0}};
+  double first = stamp_of(messages.front());
+  double last = first;
+  for (const SensorMessage& message : messages) {
+    first = std::min(first, stamp_of(message));
+    last = std::max(last, stamp_of(message));
+  }
+  const double period = (last - first) + median_laser_period(messages);
+  const std::size_t n = messages.size();
+  messages.reserve(n * fault.times);
+  for (std::size_t copy = 1; copy < fault.times; ++copy) {
+    for (std::size_t i = 0; i < n; ++i) {
+      messages.push_back(messages[i]);
+      shift_stamp(messages.back(), static_cast<double>(copy) * period);
+    }
+  }
+  return {{"copies", static_cast<double>(fault.times)}, {"period_s", period}};
 }
 
 }  // namespace

@@ -133,9 +133,16 @@ struct RangeMaxFault {
   double max = 30.0;  // m, > 0 and at most the log's maximum range
 };
 
+/// The whole log played `times` times end to end, as a robot that drives the same route again and
+/// again (a long-run memory test): every copy's stamps follow the previous copy's last one after
+/// the log's median laser period; its poses are the log's own (the robot is back at the start).
+struct RepeatFault {
+  std::size_t times = 2;  // >= 1, at most 1000
+};
+
 using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, OdomNoiseFault, ScanGapFault,
                            DecimateFault, JitterFault, DuplicateFault, BackwardsFault, RangeNoiseFault,
-                           SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault>;
+                           SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault, RepeatFault>;
 
 /// What one fault changed: its canonical spec and named counts or sizes (e.g. {"stalls", 22}).
 struct FaultReport {
