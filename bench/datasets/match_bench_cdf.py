@@ -88,6 +88,7 @@ def draw(cases, title, success_trans, success_rot):
 
 def save_atomically(figure, path, dpi):
     folder = os.path.dirname(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
     suffix = os.path.splitext(path)[1] or ".png"
     handle, temporary = tempfile.mkstemp(dir=folder, suffix=suffix)
     os.close(handle)
