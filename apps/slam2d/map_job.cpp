@@ -103,13 +103,14 @@ class ScanRateFilter {
   double last_slot_ = 0.0;  // the slot of the last scan taken
 };
 
-// Streams the log's laser scans to `add_scan(laser, odometry)` (which returns the robot pose it
-// estimated), with the progress line; the scans left out by --scan-rate or outside a trajectory
-// feed's span are skipped. Fills every field of the run but the map.
 struct IgnoreImu {
   void operator()(const ImuMessage&) const {}
 };
 
+// Streams the log's laser scans to `add_scan(laser, odometry)` (which returns the robot pose it
+// estimated) and its IMU readings to `on_imu`, with the progress line; the scans left out by
+// --scan-rate or outside a trajectory feed's span are skipped. Fills every field of the run but
+// the map.
 template <typename AddScan, typename OnImu = IgnoreImu>
 MappingRun run_over_scans(const MapJobOptions& options, const OdometryFeed& feed, const std::string& label,
                           AddScan&& add_scan, OnImu&& on_imu = OnImu{}) {
