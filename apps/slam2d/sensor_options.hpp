@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The reader options shared by every command that reads a log (info, map, localize, odometry,
-// match, match-bench, convert, perturb): the sensor-geometry overrides --fov, --angle-min, --angle-increment in
+// match, match-bench, convert): the sensor-geometry overrides --fov, --angle-min, --angle-increment in
 // degrees and --range-max in metres on the command line, radians and metres in CarmenReaderOptions,
 // which beat the log's PARAM lines and the CARMEN convention (docs/sensor_geometry.md); and
 // --raw-odometry, which turns off the repair of odometry that integrates reversing as forward
