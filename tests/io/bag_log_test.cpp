@@ -153,7 +153,8 @@ TEST(BagLog, GeometryOverridesReplaceWhatTheScanDeclares) {
   fov.field_of_view = 0.6;  // 3 beams, odd: 2 steps of 0.3, from -0.3
   BagLogReader reader(std::make_unique<FakeSource>(kTopics, std::vector<DecodedRecord>{odometry(0.0, SE2()), scan(0.0)}),
                       BagSelection{}, fov);
-  const LaserScan& laser = std::get<LaserMessage>(read_all(reader).back()).scan;
+  const std::vector<SensorMessage> messages = read_all(reader);  // kept: the scan is read from it
+  const LaserScan& laser = std::get<LaserMessage>(messages.back()).scan;
   EXPECT_NEAR(laser.angle_min, -0.3, 1e-15);
   EXPECT_NEAR(laser.angle_increment, 0.3, 1e-15);
   EXPECT_EQ(laser.range_max, 30.0) << "not overridden: as declared";

@@ -94,7 +94,8 @@ TEST(Presets, AValueInAPresetReachesTheConfigAndSectionsNest) {
   EXPECT_EQ(find_row(rows, "map_resolution")->value, "0.1");
   // A nested section: Hector's matcher iterations.
   const std::string hector = write_text(dir, "hector.yaml", "method: hector\nmatcher:\n  fine_iterations: 9\n");
-  const FieldRow* fine = find_row(method_fields("hector", hector), "matcher.fine_iterations");
+  const std::vector<FieldRow> hector_rows = method_fields("hector", hector);  // kept: `fine` points into it
+  const FieldRow* fine = find_row(hector_rows, "matcher.fine_iterations");
   ASSERT_NE(fine, nullptr);
   EXPECT_EQ(fine->value, "9");
 }
