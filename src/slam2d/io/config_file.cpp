@@ -78,10 +78,25 @@ ConfigNode ConfigNode::at(const std::string& key) const {
   return child(key);
 }
 
+namespace {
+
+// A mapping's key as a name; a key that is itself a list or a mapping (YAML's "? [a, b]: value",
+// found by fuzzing) is a ParseError at its line, not yaml-cpp's conversion error.
+std::string key_name(const YAML::Node& key, const std::string& path, std::size_t fallback_line) {
+  if (!key.IsScalar()) {
+    const YAML::Mark mark = key.Mark();
+    throw ParseError(path, mark.line >= 0 ? static_cast<std::size_t>(mark.line) + 1 : fallback_line,
+                     "a key must be a name, not a list or a mapping");
+  }
+  return key.Scalar();
+}
+
+}  // namespace
+
 std::vector<std::string> ConfigNode::keys() const {
   std::vector<std::string> out;
   if (!is_map()) return out;
-  for (const auto& entry : impl_->node) out.push_back(entry.first.as<std::string>());
+  for (const auto& entry : impl_->node) out.push_back(key_name(entry.first, impl_->path, impl_->line));
   return out;
 }
 
@@ -181,7 +196,7 @@ void ConfigNode::mark_read(const std::string& key) const { impl_->read_keys.inse
 void ConfigNode::reject_unread_keys() const {
   if (!is_map()) return;
   for (const auto& entry : impl_->node) {
-    const std::string key = entry.first.as<std::string>();
+    const std::string key = key_name(entry.first, impl_->path, impl_->line);
     if (impl_->read_keys.count(key) == 0) {
       const YAML::Mark mark = entry.first.Mark();
       throw ParseError(impl_->path, mark.line >= 0 ? static_cast<std::size_t>(mark.line) + 1 : impl_->line,
