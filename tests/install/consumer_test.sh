@@ -4,10 +4,12 @@
 # fresh prefix, build examples/consumer against that prefix alone (find_package(slam2d)), run its
 # two programs (match two scans; graph SLAM over a simulated log from the installed tool) and
 # check what they print and write.
-#   consumer_test.sh BUILD_DIR SOURCE_DIR
+#   consumer_test.sh BUILD_DIR SOURCE_DIR [SANITIZERS]
+# SANITIZERS: the build's SLAM2D_SANITIZE (its static libraries need the runtime in the consumer).
 set -euo pipefail
 build=$(realpath "$1")
 source=$(realpath "$2")
+sanitize_flags=${3:+-fsanitize=$3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -24,7 +26,8 @@ fi
 headers=$(grep -c include "$work/all_headers.cpp")
 c++ -std=c++20 -fsyntax-only -I"$work/prefix/include" -I/usr/include/eigen3 "$work/all_headers.cpp"
 cmake -S "$source/examples/consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >/dev/null
+  -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF \
+  -DCMAKE_CXX_FLAGS="$sanitize_flags" -DCMAKE_EXE_LINKER_FLAGS="$sanitize_flags" >/dev/null
 # The consumer must read the installed headers, never the source tree's.
 if grep -rq -- "$source/src" "$work/consumer/CMakeFiles" 2>/dev/null; then
   echo "consumer_test: the consumer build refers to the source tree $source/src" >&2
