@@ -5,8 +5,8 @@
 
 namespace slam2d::cli {
 
-void add_relation_error(JsonObject& json, const Trajectory& estimate, const std::vector<Relation>& relations,
-                        double stamp_tolerance) {
+RelationErrorResult add_relation_error(JsonObject& json, const Trajectory& estimate, const std::vector<Relation>& relations,
+                                       double stamp_tolerance) {
   const RelationErrorResult result = relation_error(estimate, relations, {.stamp_tolerance = stamp_tolerance});
   json.add("relations", result.relations).add("missing", result.missing);
   json.add("trans_mean", result.translation.mean).add("trans_std", result.translation.std);
@@ -16,6 +16,7 @@ void add_relation_error(JsonObject& json, const Trajectory& estimate, const std:
   json.add("trans_sq_mean", result.translation_squared.mean).add("trans_sq_std", result.translation_squared.std);
   json.add("rot_sq_mean_deg2", result.rotation_squared_deg2.mean);
   json.add("rot_sq_std_deg2", result.rotation_squared_deg2.std);
+  return result;
 }
 
 ReferenceError add_reference_error(JsonObject& json, const Trajectory& estimate, const Trajectory& reference,

@@ -5,6 +5,7 @@
 #include "json.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/eval/ate.hpp"
+#include "slam2d/eval/relation_error.hpp"
 #include "slam2d/eval/rpe.hpp"
 #include "slam2d/io/relations.hpp"
 
@@ -12,8 +13,8 @@ namespace slam2d::cli {
 
 /// relations, missing, trans_mean, trans_std, trans_max, rot_mean_deg, rot_std_deg, rot_max_deg,
 /// trans_sq_mean, rot_sq_mean_deg2 (Kuemmerle et al. 2009).
-void add_relation_error(JsonObject& json, const Trajectory& estimate, const std::vector<Relation>& relations,
-                        double stamp_tolerance);
+RelationErrorResult add_relation_error(JsonObject& json, const Trajectory& estimate, const std::vector<Relation>& relations,
+                                       double stamp_tolerance);
 
 struct ReferenceError {
   AteResult ate;

@@ -115,6 +115,11 @@ JsonObject& JsonObject::add(std::string_view key, const std::vector<std::string>
   }
   return add_scalar(key, encoded + "]", values.empty() ? "none" : plain);
 }
+JsonObject& JsonObject::add(std::string_view key, const std::vector<double>& values) {
+  std::string encoded = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) encoded += (i == 0 ? "" : ", ") + json_number(values[i]);
+  return add_scalar(key, encoded + "]", std::to_string(values.size()) + " numbers");
+}
 JsonObject& JsonObject::add(std::string_view key, const JsonObject& value) {
   members_.push_back({std::string(key), "", "", std::make_shared<const JsonObject>(value)});
   return *this;

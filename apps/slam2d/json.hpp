@@ -23,6 +23,7 @@ class JsonObject {
   JsonObject& add(std::string_view key, const char* value) { return add(key, std::string_view(value)); }
   JsonObject& add(std::string_view key, const std::optional<double>& value);
   JsonObject& add(std::string_view key, const std::vector<std::string>& values);  // an array of strings
+  JsonObject& add(std::string_view key, const std::vector<double>& values);       // an array of numbers
   JsonObject& add(std::string_view key, const JsonObject& value);
   JsonObject& add_null(std::string_view key);
   /// Appends the other object's members, in their order.

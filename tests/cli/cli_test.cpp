@@ -7,8 +7,11 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <cmath>
 #include <iterator>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/eval/ate.hpp"
@@ -134,6 +137,93 @@ TEST_F(CliTest, EvalAgainstTheTruthAndRelations) {
   ASSERT_EQ(missing.exit_code, 0) << missing.errors;
   EXPECT_TRUE(json_number(missing.output, "relations"));
   EXPECT_TRUE(json_number(missing.output, "missing"));
+}
+
+// The rows of a CSV with a header line, as numbers.
+std::vector<std::vector<double>> read_csv_rows(const std::string& path, std::string* header) {
+  std::ifstream in(path);
+  std::getline(in, *header);
+  std::vector<std::vector<double>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<double> row;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST_F(CliTest, EvalWritesEachErrorItSummarises) {
+  TempDir out;
+  ASSERT_EQ(run_command(slam2d("map --quiet --method odometry --out " + out.path().string() + " " + log())).exit_code, 0);
+  const std::string estimate_path = out.file("trajectory.txt");
+  const Trajectory estimate = read_trajectory(estimate_path);
+  const Trajectory truth_poses = read_trajectory(truth());
+  const StampIndex estimate_index(estimate);
+  const StampIndex truth_index(truth_poses);
+
+  // Against the truth: one row per pose, and each row's ATE is the distance between the aligned
+  // estimate and the truth at its stamp.
+  const CommandResult poses = run_command(slam2d("eval --json " + estimate_path + " --reference " + truth() +
+                                                 " --errors-csv " + out.file("poses.csv") + " --errors-json " +
+                                                 out.file("poses.json")));
+  ASSERT_EQ(poses.exit_code, 0) << poses.errors;
+  std::string header;
+  const std::vector<std::vector<double>> rows = read_csv_rows(out.file("poses.csv"), &header);
+  EXPECT_EQ(header, "stamp,x,y,ate_m");
+  ASSERT_EQ(rows.size(), static_cast<std::size_t>(*json_number(poses.output, "matched")));
+  double sum = 0.0;
+  for (const std::vector<double>& row : rows) {
+    ASSERT_EQ(row.size(), 4u);
+    const std::optional<std::size_t> k = truth_index.nearest(row[0], 0.001);
+    ASSERT_TRUE(k);
+    EXPECT_NEAR(std::hypot(row[1] - truth_poses[*k].pose.x(), row[2] - truth_poses[*k].pose.y()), row[3], 1e-9);
+    sum += row[3];
+  }
+  EXPECT_GT(sum, 0.0);
+  EXPECT_NEAR(sum / static_cast<double>(rows.size()), *json_number(poses.output, "ate_mean"), 1e-9);
+  const std::string json = read_text(out.file("poses.json"));
+  EXPECT_NE(json.find("\"poses\""), std::string::npos);
+  EXPECT_NE(json.find("\"rpe_windows\""), std::string::npos);
+
+  // Relations made from the truth (every 50th pose to the 20th after it): one row per relation,
+  // its error recomputed from the estimate's poses at the two stamps.
+  std::ofstream relations(out.file("truth.relations"));
+  relations.precision(17);
+  for (std::size_t i = 0; i + 20 < truth_poses.size(); i += 50) {
+    const SE2 T = truth_poses[i].pose.between(truth_poses[i + 20].pose);
+    relations << truth_poses[i].stamp << " " << truth_poses[i + 20].stamp << " " << T.x() << " " << T.y() << " 0 0 0 "
+              << T.theta() << "\n";
+  }
+  relations.close();
+  const CommandResult evaluated = run_command(slam2d("eval --json " + estimate_path + " --relations " +
+                                                     out.file("truth.relations") + " --errors-csv " +
+                                                     out.file("relations.csv")));
+  ASSERT_EQ(evaluated.exit_code, 0) << evaluated.errors;
+  const std::vector<std::vector<double>> relation_rows = read_csv_rows(out.file("relations.csv"), &header);
+  EXPECT_EQ(header, "stamp_from,stamp_to,x_from,y_from,x_to,y_to,translation_m,rotation_deg");
+  ASSERT_EQ(relation_rows.size(), static_cast<std::size_t>(*json_number(evaluated.output, "relations")));
+  ASSERT_GT(relation_rows.size(), 5u);
+  sum = 0.0;
+  for (const std::vector<double>& row : relation_rows) {
+    const std::optional<std::size_t> i = estimate_index.nearest(row[0], 0.001);
+    const std::optional<std::size_t> j = estimate_index.nearest(row[1], 0.001);
+    const std::optional<std::size_t> ti = truth_index.nearest(row[0], 0.001);
+    const std::optional<std::size_t> tj = truth_index.nearest(row[1], 0.001);
+    ASSERT_TRUE(i && j && ti && tj);
+    EXPECT_NEAR(row[2], estimate[*i].pose.x(), 1e-9);
+    EXPECT_NEAR(row[5], estimate[*j].pose.y(), 1e-9);
+    const SE2 D = truth_poses[*ti].pose.between(truth_poses[*tj].pose).between(estimate[*i].pose.between(estimate[*j].pose));
+    EXPECT_NEAR(row[6], D.translation().norm(), 1e-6);
+    sum += row[6];
+  }
+  EXPECT_NEAR(sum / static_cast<double>(relation_rows.size()), *json_number(evaluated.output, "trans_mean"), 1e-9);
+
+  // A failed evaluation writes no errors file.
+  const CommandResult failed = run_command(slam2d("eval " + estimate_path + " --reference " + out.file("absent.txt") +
+                                                  " --errors-csv " + out.file("never.csv")));
+  EXPECT_NE(failed.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(out.file("never.csv")));
 }
 
 TEST_F(CliTest, SimulateIsDeterministic) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -644,6 +645,44 @@ TEST(FaultInjection, RepeatPlaysTheLogAgainAfterItsEnd) {
   EXPECT_EQ(once.size(), log.size());
   EXPECT_THROW(parse_fault("repeat:times=0"), Error);
   EXPECT_THROW(parse_fault("repeat:times=1001"), Error);
+}
+
+TEST(FaultInjection, RepeatBackDrivesTheRouteBackWithoutATeleport) {
+  const Messages& log = office();
+  Messages messages = log;
+  report_of("repeat:times=3,back=1", messages);
+  ASSERT_EQ(messages.size(), 3 * log.size());
+  EXPECT_EQ(fault_spec(parse_fault("repeat:back=1,times=3")), "repeat:times=3,back=1");
+  const std::size_t n = log.size();
+  for (std::size_t i = 0; i < n; i += 97) {
+    // The second copy is the log backwards, the third forwards again.
+    const SensorMessage& back = messages[n + (n - 1 - i)];
+    EXPECT_EQ(back.index(), log[i].index());
+    EXPECT_NEAR(stamp_of(back) - stamp_of(messages[n]), stamp_of(log.back()) - stamp_of(log[i]), 1e-6) << i;
+    if (const auto* laser = std::get_if<LaserMessage>(&back)) {
+      EXPECT_EQ(laser->scan.ranges, std::get<LaserMessage>(log[i]).scan.ranges);
+      EXPECT_TRUE(laser->odom_pose.is_approx(std::get<LaserMessage>(log[i]).odom_pose, 0.0));
+    }
+    if (const auto* odometry = std::get_if<OdometryMessage>(&back)) {
+      EXPECT_EQ(odometry->reading.tv, -std::get<OdometryMessage>(log[i]).reading.tv);
+      EXPECT_EQ(odometry->reading.rv, -std::get<OdometryMessage>(log[i]).reading.rv);
+    }
+    EXPECT_EQ(messages[2 * n + i].index(), log[i].index());
+  }
+  // Stamps still increase, and each copy starts where the previous one ended: no pose jump.
+  double previous = -1e300;
+  std::optional<SE2> last_pose;
+  double largest_step = 0.0;
+  for (const SensorMessage& message : messages) {
+    if (const auto* laser = std::get_if<LaserMessage>(&message)) {
+      EXPECT_GT(laser->scan.stamp, previous);
+      previous = laser->scan.stamp;
+      if (last_pose) largest_step = std::max(largest_step, (laser->odom_pose.translation() - last_pose->translation()).norm());
+      last_pose = laser->odom_pose;
+    }
+  }
+  EXPECT_LT(largest_step, 0.5);
+  EXPECT_THROW(parse_fault("repeat:times=2,back=2"), Error);
 }
 
 }  // namespace

@@ -58,8 +58,10 @@ AteResult absolute_trajectory_error(const Trajectory& estimate, const Trajectory
   result.matched = pairs.size();
   result.T_reference_estimate = align_rigid_2d(source, target);
   result.errors.reserve(pairs.size());
+  result.estimate_indices.reserve(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     result.errors.push_back((result.T_reference_estimate * source[i] - target[i]).norm());
+    result.estimate_indices.push_back(pairs[i].estimate_index);
   }
   result.rmse = root_mean_square(result.errors);
   const ErrorStatistics statistics = compute_statistics(result.errors);

@@ -33,6 +33,7 @@ struct AteResult {
   double median = 0.0;         // m
   double max = 0.0;            // m
   std::vector<double> errors;  // m, one per associated pair, in stamp order
+  std::vector<std::size_t> estimate_indices;  // into the estimate, the pose of each of those pairs
 };
 
 /// ATE of `estimate` against `reference`. Throws Error when fewer than two poses associate (the

@@ -24,7 +24,7 @@ void check_relations_finite(const std::vector<Relation>& relations) {
 RelationError error_of_relation(std::size_t index, const SE2& T_world_i, const SE2& T_world_j, const SE2& T_i_j_truth) {
   const SE2 T_i_j_estimate = T_world_i.between(T_world_j);
   const SE2 D = T_i_j_truth.between(T_i_j_estimate);
-  return {index, D.translation().norm(), std::abs(D.theta())};
+  return {index, D.translation().norm(), std::abs(D.theta()), T_world_i, T_world_j};
 }
 
 // Eq. (2) and the tables of Sec. 5: statistics of the errors and of their squares.

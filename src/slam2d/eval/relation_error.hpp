@@ -35,6 +35,8 @@ struct RelationError {
   std::size_t relation_index = 0;  // into the relations vector
   double translation = 0.0;        // m, |t(D)|
   double rotation = 0.0;           // rad, |angle(D)|, in [0, pi]
+  SE2 T_world_from;                // the estimate's poses at the relation's two stamps (where to draw it)
+  SE2 T_world_to;
 };
 
 struct RelationErrorResult {

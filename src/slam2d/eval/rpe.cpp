@@ -50,6 +50,7 @@ RpeResult relative_pose_error(const Trajectory& estimate, const Trajectory& refe
   check_fields(config, "RpeConfig");
   const std::vector<AssociatedPose> pairs = associate_by_stamp(estimate, reference, config.stamp_tolerance);
   const std::vector<double> along = positions_along(pairs, config.window);
+  RpeResult result;
   std::vector<double> translation;
   std::vector<double> rotation_deg;
   // Eq. (2) over every i: j is the first pose with along[j] - along[i] >= delta. Since `along`
@@ -62,8 +63,8 @@ RpeResult relative_pose_error(const Trajectory& estimate, const Trajectory& refe
     const SE2 error = relative_error(pairs[i], pairs[j]);
     translation.push_back(error.translation().norm());
     rotation_deg.push_back(rad_to_deg(std::abs(error.theta())));
+    result.errors.push_back({pairs[i].stamp, pairs[j].stamp, translation.back(), rotation_deg.back()});
   }
-  RpeResult result;
   result.matched = pairs.size();
   result.pairs = translation.size();
   result.translation = summarise(translation);

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstddef>
+#include <vector>
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/trajectory.hpp"
@@ -45,11 +46,20 @@ struct RpeStatistics {
   double max = 0.0;
 };
 
+/// One window's error.
+struct RpeWindowError {
+  double stamp_from = 0.0;   // s, the estimate's stamp at i
+  double stamp_to = 0.0;     // s, ... at j
+  double translation = 0.0;  // m, |t(E_ij)|
+  double rotation_deg = 0.0; // deg, |angle(E_ij)|
+};
+
 struct RpeResult {
   std::size_t matched = 0;     // associated pose pairs
   std::size_t pairs = 0;       // (i, j) windows evaluated
   RpeStatistics translation;   // m
   RpeStatistics rotation_deg;  // deg
+  std::vector<RpeWindowError> errors;  // one per window, in stamp order
 };
 
 /// RPE of `estimate` against `reference`. Statistics are zero when no window fits (pairs == 0).

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/thread_sanitizer.hpp"
 #include "slam2d/grid/grid_geometry.hpp"
 #include "slam2d/grid/ray_casting.hpp"
 
@@ -141,7 +142,9 @@ Cell* TiledGrid<Cell, kLog2TileSize>::mutable_tile(CellIndex tile) {
     entry = std::make_shared<Tile>();
     entry->cells.fill(default_value_);
   } else if (entry.use_count() > 1) {
-    entry = std::make_shared<Tile>(*entry);  // copy-on-write
+    std::shared_ptr<Tile> copy = std::make_shared<Tile>(*entry);  // copy-on-write
+    tsan_release(entry.get());  // what the count's decrement below releases, declared to TSan
+    entry = std::move(copy);
   } else {
     // This grid is the tile's only owner: it is written in place. Why that is safe while other
     // threads work on other grids that shared this tile until a moment ago:
@@ -161,6 +164,7 @@ Cell* TiledGrid<Cell, kLog2TileSize>::mutable_tile(CellIndex tile) {
     // then the other writes in place (it saw 1); either way every grid gets the same cells, so the
     // values do not depend on the schedule, only which grid keeps the old tile object does.
     std::atomic_thread_fence(std::memory_order_acquire);
+    tsan_acquire(entry.get());  // what the fence acquires, declared to TSan (it ignores fences)
   }
   return entry->cells.data();
 }

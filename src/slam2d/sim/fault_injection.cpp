@@ -181,7 +181,9 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
       {"fov", [](SpecArguments& a) -> Fault { return FovFault{a.number("deg", FovFault{}.deg, {0.0, 360.0, true})}; }},
       {"range-max", [](SpecArguments& a) -> Fault { return RangeMaxFault{a.number("max", RangeMaxFault{}.max, kPositive)}; }},
       {"repeat", [](SpecArguments& a) -> Fault {
-         const RepeatFault f{a.count("times", RepeatFault{}.times, 1)};
+         const std::size_t back = a.count("back", 0, 0);
+         if (back > 1) a.fail("back must be 0 or 1");
+         const RepeatFault f{a.count("times", RepeatFault{}.times, 1), back == 1};
          if (f.times > 1000) a.fail("times must be at most 1000");
          return f;
        }},
@@ -220,7 +222,11 @@ Parameters parameters(const SpuriousShortFault& f) {
 Parameters parameters(const BeamsFault& f) { return {"beams", {{"k", as_number(f.k)}}}; }
 Parameters parameters(const FovFault& f) { return {"fov", {{"deg", f.deg}}}; }
 Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.max}}}; }
-Parameters parameters(const RepeatFault& f) { return {"repeat", {{"times", as_number(f.times)}}}; }
+Parameters parameters(const RepeatFault& f) {
+  Parameters p{"repeat", {{"times", as_number(f.times)}}};
+  if (f.back) p.second.push_back({"back", 1.0});
+  return p;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Messages: stamps, odometry chains, laser lines.
@@ -751,6 +757,26 @@ void shift_stamp(SensorMessage& message, double by) {
   std::visit(Shift{by}, message);
 }
 
+// The message as the robot driving backwards would record it, at stamp `mirror` - stamp: the same
+// poses and ranges, velocities and the yaw rate negated.
+void reverse_in_time(SensorMessage& message, double mirror) {
+  struct Reverse {
+    double mirror;
+    void operator()(LaserMessage& m) const { m.scan.stamp = mirror - m.scan.stamp; }
+    void operator()(OdometryMessage& m) const {
+      m.reading.stamp = mirror - m.reading.stamp;
+      m.reading.tv = -m.reading.tv;
+      m.reading.rv = -m.reading.rv;
+    }
+    void operator()(TruePoseMessage& m) const { m.stamp = mirror - m.stamp; }
+    void operator()(ImuMessage& m) const {
+      m.reading.stamp = mirror - m.reading.stamp;
+      m.reading.yaw_rate = -m.reading.yaw_rate;
+    }
+  };
+  std::visit(Reverse{mirror}, message);
+}
+
 // The median gap between consecutive laser stamps (0.1 s without two scans).
 double median_laser_period(const Messages& messages) {
   std::vector<double> gaps;
@@ -778,9 +804,17 @@ Changes apply(const RepeatFault& fault, Messages& messages, Rng&) {
   const std::size_t n = messages.size();
   messages.reserve(n * fault.times);
   for (std::size_t copy = 1; copy < fault.times; ++copy) {
-    for (std::size_t i = 0; i < n; ++i) {
-      messages.push_back(messages[i]);
-      shift_stamp(messages.back(), static_cast<double>(copy) * period);
+    const double start = static_cast<double>(copy) * period;  // the copy's first stamp, less `first`
+    if (fault.back && copy % 2 == 1) {  // backwards: the last message first, at the copy's start
+      for (std::size_t i = n; i-- > 0;) {
+        messages.push_back(messages[i]);
+        reverse_in_time(messages.back(), first + last + start);
+      }
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        messages.push_back(messages[i]);
+        shift_stamp(messages.back(), start);
+      }
     }
   }
   return {{"copies", static_cast<double>(fault.times)}, {"period_s", period}};

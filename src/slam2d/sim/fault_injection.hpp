@@ -138,6 +138,7 @@ struct RangeMaxFault {
 /// the log's median laser period; its poses are the log's own (the robot is back at the start).
 struct RepeatFault {
   std::size_t times = 2;  // >= 1, at most 1000
+  bool back = false;      // every other copy played backwards: the robot drives the route back to its start
 };
 
 using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, OdomNoiseFault, ScanGapFault,

@@ -162,6 +162,28 @@ TEST(TrajectoryFusion, SmoothedCorrectionsKeepNoisySparsePosesFromBendingTheDens
   EXPECT_LT(max_error(drifted, path), 0.05);
 }
 
+TEST(TrajectoryFusion, ACorrectionChangesOnlyWhileTheRobotMoves) {
+  // The robot stands for 2 s, then drives 1 m in 1 s; the sparse poses say the drive was 10 cm
+  // longer. The correction must be spent over the drive: interpolated in time, two thirds of it
+  // would move the standing robot (6.7 cm of motion that never happened).
+  Trajectory dense;
+  for (int i = 0; i <= 30; ++i) dense.push_back(0.1 * i, SE2(i <= 20 ? 0.0 : 0.1 * (i - 20), 0.0, 0.0));
+  Trajectory sparse;
+  sparse.push_back(0.0, SE2(0.0, 0.0, 0.0));
+  sparse.push_back(3.0, SE2(1.1, 0.0, 0.0));
+  const Trajectory fused = fuse_trajectories(dense, sparse, {.correction_smoothing = 0.0});
+  for (std::size_t i = 0; i <= 20; ++i) EXPECT_NEAR(fused[i].pose.x(), 0.0, 1e-12) << "standing, " << i;
+  for (std::size_t i = 21; i <= 30; ++i) EXPECT_NEAR(fused[i].pose.x(), 0.11 * static_cast<double>(i - 20), 1e-12) << i;
+  // A turn in place has no distance: there the correction goes in time.
+  Trajectory turn;
+  for (int i = 0; i <= 10; ++i) turn.push_back(0.1 * i, SE2(0.0, 0.0, 0.1 * i));
+  Trajectory turned;
+  turned.push_back(0.0, SE2(0.0, 0.0, 0.0));
+  turned.push_back(1.0, SE2(0.0, 0.0, 1.2));
+  const Trajectory in_place = fuse_trajectories(turn, turned, {.correction_smoothing = 0.0});
+  for (std::size_t i = 0; i <= 10; ++i) EXPECT_NEAR(in_place[i].pose.theta(), 0.12 * static_cast<double>(i), 1e-12) << i;
+}
+
 TEST(TrajectoryFusion, RefusesWhatItCannotFuse) {
   const Trajectory path = truth();
   EXPECT_THROW(fuse_trajectories(Trajectory(), path), Error);

@@ -18,12 +18,16 @@ namespace {
 // the dense path's noise would be magnified. It is blended instead (see the header).
 constexpr double kMinSpan = 0.05;
 constexpr double kMaxScaleChange = 0.5;
+// A segment along which the dense path travels less than this (m) has no usable progress: its
+// corrections are interpolated in time instead (the robot turned in place or stood).
+constexpr double kMinProgress = 0.001;
 
 /// A sparse pose and the dense pose at its stamp.
 struct Anchor {
   double stamp = 0.0;
   SE2 sparse;
   SE2 dense;
+  double progress = 0.0;  // distance the dense path has travelled at this stamp (m)
   double heading_correction() const { return normalize_angle(sparse.theta() - dense.theta()); }
 };
 
@@ -96,6 +100,36 @@ void smooth_corrections(std::vector<Anchor>& anchors, double sigma) {
   for (std::size_t k = 0; k < anchors.size(); ++k) anchors[k].sparse = smoothed[k];
 }
 
+/// The distance travelled along the (sorted) dense trajectory up to each of its poses.
+std::vector<double> travelled(const Trajectory& dense) {
+  std::vector<double> distance(dense.size(), 0.0);
+  for (std::size_t i = 1; i < dense.size(); ++i) {
+    distance[i] = distance[i - 1] + (dense[i].pose.translation() - dense[i - 1].pose.translation()).norm();
+  }
+  return distance;
+}
+
+/// The distance travelled at `stamp` (within the dense span), interpolated between the poses around it.
+double travelled_at(const Trajectory& dense, const std::vector<double>& distance, double stamp) {
+  const auto after = std::lower_bound(dense.begin(), dense.end(), stamp,
+                                      [](const StampedPose& pose, double t) { return pose.stamp < t; });
+  const auto i = static_cast<std::size_t>(after - dense.begin());
+  if (i == 0) return distance.front();
+  if (i == dense.size()) return distance.back();
+  const double span = dense[i].stamp - dense[i - 1].stamp;
+  const double s = span > 0.0 ? (stamp - dense[i - 1].stamp) / span : 1.0;
+  return distance[i - 1] + s * (distance[i] - distance[i - 1]);
+}
+
+/// Where a dense pose lies between a segment's two anchors, 0 at the first and 1 at the last: by
+/// distance travelled, so that a correction changes only while the robot moves (a standing Hector
+/// does not drift, and its relative motion is kept exactly), by time where the segment has no progress.
+double segment_fraction(const Anchor& first, const Anchor& last, double stamp, double progress) {
+  const double span = last.progress - first.progress;
+  if (span >= kMinProgress) return std::clamp((progress - first.progress) / span, 0.0, 1.0);
+  return (stamp - first.stamp) / (last.stamp - first.stamp);
+}
+
 }  // namespace
 
 void validate(const FusionConfig& config) { check_fields(config, "FusionConfig"); }
@@ -107,10 +141,13 @@ Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& spars
   check(!sparse_in.empty(), "fuse: the sparse trajectory is empty");
   const Trajectory dense = dense_in.sorted_by_stamp();
   const Trajectory sparse = sparse_in.sorted_by_stamp();
+  const std::vector<double> distance = travelled(dense);
   std::vector<Anchor> anchors;
   for (const StampedPose& pose : sparse) {
     const std::optional<SE2> at = dense.interpolate(pose.stamp);
-    if (at && (anchors.empty() || pose.stamp > anchors.back().stamp)) anchors.push_back({pose.stamp, pose.pose, *at});
+    if (at && (anchors.empty() || pose.stamp > anchors.back().stamp)) {
+      anchors.push_back({pose.stamp, pose.pose, *at, travelled_at(dense, distance, pose.stamp)});
+    }
   }
   check(!anchors.empty(), "fuse: no sparse pose falls within the dense trajectory's time span");
   smooth_corrections(anchors, config.correction_smoothing);
@@ -128,7 +165,8 @@ Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& spars
   Trajectory fused;
   fused.reserve(dense.size());
   std::size_t k = 0;  // the segment [anchors[k], anchors[k + 1]] holding the current stamp
-  for (const StampedPose& pose : dense) {
+  for (std::size_t i = 0; i < dense.size(); ++i) {
+    const StampedPose& pose = dense[i];
     const double t = pose.stamp;
     if (t <= anchors.front().stamp) {
       fused.push_back(t, apply(rigid(anchors.front()), pose.pose, anchors.front().heading_correction()));
@@ -138,7 +176,7 @@ Trajectory fuse_trajectories(const Trajectory& dense_in, const Trajectory& spars
       while (anchors[k + 1].stamp < t) ++k;
       const Anchor& first = anchors[k];
       const Anchor& last = anchors[k + 1];
-      const double s = (t - first.stamp) / (last.stamp - first.stamp);
+      const double s = segment_fraction(first, last, t, distance[i]);
       const double correction = first.heading_correction() +
                                 s * normalize_angle(last.heading_correction() - first.heading_correction());
       fused.push_back(t, maps[k] ? apply(*maps[k], pose.pose, correction)

@@ -9,16 +9,19 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <thread>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
+#include "slam2d/core/thread_sanitizer.hpp"
 #include "slam2d/core/resampling.hpp"
 
 namespace slam2d {
 
 struct RbpfWorkers {
-  explicit RbpfWorkers(int threads) : arena(threads) {}
+  explicit RbpfWorkers(int count) : threads(count), arena(count) {}
+  int threads;
   tbb::task_arena arena;  // max concurrency = the resolved thread count
 };
 
@@ -136,6 +139,19 @@ void RbpfSlam::update_particles(const LaserScan& scan, const std::vector<Eigen::
   std::vector<unsigned char> matched(n, 0);
   if (!workers_) {
     for (std::size_t i = 0; i < n; ++i) matched[i] = update_particle(i, scan, points, u) ? 1 : 0;
+  } else if (kThreadSanitizer) {
+    // Debian's libtbb is not built with ThreadSanitizer, which then cannot see TBB's hand-offs
+    // and reports every one as a race (the filter's own constructor against the workers' reads).
+    // So that TSan checks the particles' code itself, its builds run them on std::threads, whose
+    // start and join it sees; every other build uses TBB.
+    std::vector<std::thread> threads;
+    const auto count = static_cast<std::size_t>(workers_->threads);
+    for (std::size_t t = 0; t < count; ++t) {
+      threads.emplace_back([&, t] {
+        for (std::size_t i = t; i < n; i += count) matched[i] = update_particle(i, scan, points, u) ? 1 : 0;
+      });
+    }
+    for (std::thread& thread : threads) thread.join();
   } else {
     workers_->arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const tbb::blocked_range<std::size_t>& range) {
