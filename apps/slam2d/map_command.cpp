@@ -41,6 +41,9 @@ void add_map_command(CLI::App& app) {
   command->add_option("--threads", options->threads,
                       "rbpf: threads for the particles (default 0: all hardware threads; 1: serial); the result does not depend on it")
       ->check(CLI::Range(0, 256));
+  command->add_option("--reference", options->reference,
+                      "A trajectory (slam2d text or TUM, e.g. the ground truth) drawn in map.png under the run's, aligned onto it")
+      ->check(CLI::ExistingFile);
   command->add_option("--format", options->trajectory_format, "trajectory.txt as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();

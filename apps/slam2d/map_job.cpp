@@ -13,6 +13,7 @@
 #include "run_stats.hpp"
 #include "sensor_options.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/eval/ate.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/grid/render.hpp"
 #include "slam2d/io/atomic_file.hpp"
@@ -275,16 +276,35 @@ std::vector<SE2> poses_of(const Trajectory& trajectory) {
   return poses;
 }
 
+// map.png: the map cropped to what is known (20 cells of margin), the trajectory with its start and
+// end, a scale bar, and the reference (already in the map frame) under the trajectory.
 void write_outputs(const std::filesystem::path& dir, const MappingRun& run, const JsonObject& summary,
-                   TrajectoryFormat format) {
+                   TrajectoryFormat format, const std::vector<SE2>& reference) {
   std::filesystem::create_directories(dir);
   write_map((dir / "map.yaml").string(), run.map, "map.pgm");
-  write_png((dir / "map.png").string(), render_map(run.map, poses_of(run.trajectory)));
+  const RenderOptions picture{.reference = reference, .crop_margin = 20, .scale_bar = true};
+  write_png((dir / "map.png").string(), render_map(run.map, poses_of(run.trajectory), picture));
   write_trajectory((dir / "trajectory.txt").string(), run.trajectory, format);
   if (run.graph) write_g2o((dir / "graph.g2o").string(), to_pose_graph_file(*run.graph));
   if (run.dense_trajectory) write_trajectory((dir / "hector_trajectory.txt").string(), *run.dense_trajectory, format);
   if (run.sparse_trajectory) write_trajectory((dir / "sparse_trajectory.txt").string(), *run.sparse_trajectory, format);
   write_file_atomically((dir / "summary.json").string(), summary.dump());
+}
+
+// The reference trajectory in the run's map frame (the rigid motion of the ATE, fitted on the poses
+// whose stamps both have), or nothing and a warning when fewer than two stamps match.
+std::vector<SE2> reference_in_map(const Trajectory& reference, const Trajectory& trajectory,
+                                  std::vector<std::string>& warnings) {
+  try {
+    const AteResult fit = absolute_trajectory_error(reference, trajectory);
+    std::vector<SE2> poses;
+    poses.reserve(reference.size());
+    for (const StampedPose& stamped : reference) poses.push_back(fit.T_reference_estimate * stamped.pose);
+    return poses;
+  } catch (const Error& e) {
+    warnings.push_back(std::string("map.png: the reference trajectory was not drawn: ") + e.what());
+    return {};
+  }
 }
 
 // The 2015 pipeline's first step (--odometry-source hector): Hector SLAM on the laser (and IMU)
@@ -400,6 +420,8 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   trajectory_format_from_name(options.trajectory_format);  // checked before the work
   check(options.trajectory_frame == "robot" || options.trajectory_frame == "sensor",
         "map: --trajectory-frame must be robot or sensor");
+  const std::optional<Trajectory> reference =
+      options.reference.empty() ? std::nullopt : std::optional<Trajectory>(read_any_trajectory(options.reference));
   const RunClock clock;
   MappingRun run = run_method(options);
   const double cpu = clock.cpu_seconds();
@@ -416,6 +438,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
   summary.add("peak_rss_mb", peak_rss_mb());
+  const std::vector<SE2> drawn_reference = reference ? reference_in_map(*reference, run.trajectory, run.warnings) : std::vector<SE2>();
   summary.add("warnings", run.warnings);
   if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, false, run.map, run.trajectory);
   if (options.trajectory_frame == "sensor") {  // the laser's pose: what a benchmark's relations may describe
@@ -429,7 +452,7 @@ MapJobResult run_map_job(const MapJobOptions& options) {
     if (run.dense_trajectory) to_sensor(*run.dense_trajectory);
     if (run.sparse_trajectory) to_sensor(*run.sparse_trajectory);
   }
-  write_outputs(options.out_dir, run, summary, trajectory_format_from_name(options.trajectory_format));
+  write_outputs(options.out_dir, run, summary, trajectory_format_from_name(options.trajectory_format), drawn_reference);
   return {std::move(run.map), std::move(run.trajectory), std::move(summary)};
 }
 

@@ -21,6 +21,7 @@ struct MapJobOptions {
   std::string trajectory_format = "text";  // trajectory.txt as slam2d text or TUM (evo)
   std::string trajectory_frame = "robot";  // robot (base) | sensor: the laser's pose, T_robot_sensor of the first scan applied
   std::string mcap;                 // when set: the run for Foxglove (io/run_mcap.hpp) written there too
+  std::string reference;            // when set: a trajectory drawn in map.png, aligned onto the run's as the ATE aligns it
   std::string config;               // hector, graph, rbpf: a method preset (configs/<method>.yaml); empty: the defaults
   // The odometry pose each scan carries into the method: "log" (the log's), "none" (hector: the
   // last pose; graph: constant velocity; rbpf: as "hector"), "hector" (Hector SLAM's

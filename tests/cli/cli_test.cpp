@@ -226,6 +226,46 @@ TEST_F(CliTest, EvalWritesEachErrorItSummarises) {
   EXPECT_FALSE(std::filesystem::exists(out.file("never.csv")));
 }
 
+// The demo shows the flagship: graph SLAM, with the odometry beside it for contrast; graph SLAM's
+// error against the truth is a fraction of the odometry's.
+TEST(CliDemo, ShowsGraphSlamBesideTheOdometry) {
+  TempDir out;
+  const CommandResult demo = run_command(slam2d("demo --quiet --json --duration 120 --out " + out.path().string()));
+  ASSERT_EQ(demo.exit_code, 0) << demo.errors;
+  for (const char* method : {"graph", "odometry"}) {
+    for (const char* name : {"map.pgm", "map.yaml", "map.png", "trajectory.txt", "summary.json"}) {
+      EXPECT_TRUE(std::filesystem::exists(out.path() / method / name)) << method << "/" << name;
+    }
+  }
+  EXPECT_TRUE(std::filesystem::exists(out.path() / "demo.json"));
+  const Trajectory truth_poses = read_trajectory(out.file("truth.txt"));
+  const double graph = absolute_trajectory_error(read_trajectory(out.file("graph/trajectory.txt")), truth_poses).rmse;
+  const double odometry = absolute_trajectory_error(read_trajectory(out.file("odometry/trajectory.txt")), truth_poses).rmse;
+  EXPECT_LT(graph, 0.05);
+  EXPECT_LT(graph, 0.5 * odometry);
+}
+
+TEST_F(CliTest, MapDrawsAReferenceOrSaysWhyNot) {
+  TempDir out;
+  const CommandResult drawn = run_command(slam2d("map --quiet --json --method odometry --reference " + truth() +
+                                                 " --out " + out.file("a") + " " + log()));
+  ASSERT_EQ(drawn.exit_code, 0) << drawn.errors;
+  EXPECT_EQ(drawn.output.find("reference trajectory was not drawn"), std::string::npos);
+  // A reference whose stamps the run does not share cannot be aligned: the map is written, and
+  // the summary says the reference is not in it.
+  write_text(out.file("elsewhere.txt"), "1000 0 0 0\n1001 1 0 0\n");
+  const CommandResult skipped = run_command(slam2d("map --quiet --json --method odometry --reference " +
+                                                   out.file("elsewhere.txt") + " --out " + out.file("b") + " " + log()));
+  ASSERT_EQ(skipped.exit_code, 0) << skipped.errors;
+  EXPECT_NE(skipped.output.find("reference trajectory was not drawn"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(out.file("b/map.png")));
+  // A reference that is not there stops the run before any work.
+  const CommandResult missing = run_command(slam2d("map --quiet --reference " + out.file("absent.txt") + " --out " +
+                                                   out.file("c") + " " + log()));
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(out.file("c/map.png")));
+}
+
 TEST_F(CliTest, SimulateIsDeterministic) {
   TempDir out;
   ASSERT_EQ(run_command(slam2d("simulate --quiet --duration 30 --seed 5 --out " + out.file("again.clf"))).exit_code, 0);

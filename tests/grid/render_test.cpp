@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -87,6 +88,69 @@ TEST(Render, RotatedOriginAndClipping) {
   const RenderOptions defaults;
   EXPECT_EQ(pixel(image, 2, 5), defaults.start_colour);
   for (int c = 3; c < 10; ++c) EXPECT_EQ(pixel(image, c, 5), defaults.trajectory_colour) << c;
+}
+
+TEST(Render, CropsToTheKnownCellsAndThePathsWithAMargin) {
+  // 100 x 80 cells of 0.1 m, unknown but for a 10 x 5 block of free cells at (40..49, 20..24).
+  OccupancyMap map;
+  map.resolution = 0.1;
+  map.origin = SE2(-3.0, 2.0, 0.0);
+  map.width = 100;
+  map.height = 80;
+  map.cells.assign(8000, OccupancyMap::kUnknown);
+  for (int iy = 20; iy < 25; ++iy) {
+    for (int ix = 40; ix < 50; ++ix) map.at(ix, iy) = OccupancyMap::kFree;
+  }
+  const RgbImage whole = render_map(map, {}, RenderOptions{.crop_margin = -1});
+  EXPECT_EQ(whole.width, 100);
+  const RgbImage cropped = render_map(map, {}, RenderOptions{.crop_margin = 3});
+  EXPECT_EQ(cropped.width, 10 + 2 * 3);
+  EXPECT_EQ(cropped.height, 5 + 2 * 3);
+  const RenderOptions defaults;
+  EXPECT_EQ(pixel(cropped, 3, 3), defaults.free_colour);  // the block's top-left cell (40, 24)
+  EXPECT_EQ(pixel(cropped, 2, 3), defaults.unknown_colour);
+  // A reference path reaching cell (70, 60) widens the box to it; drawn in its colour, as the
+  // path is where it leaves the block's picture position unchanged.
+  const Eigen::Vector2d far = map.origin.act(Eigen::Vector2d(70.5 * 0.1, 60.5 * 0.1));
+  const Eigen::Vector2d near = map.origin.act(Eigen::Vector2d(45.5 * 0.1, 22.5 * 0.1));
+  RenderOptions with_reference{.marker_radius = 0, .crop_margin = 0};
+  with_reference.reference = {SE2(near.x(), near.y(), 0.0), SE2(far.x(), far.y(), 0.0)};
+  const RgbImage widened = render_map(map, {}, with_reference);
+  EXPECT_EQ(widened.width, 70 - 40 + 1);
+  EXPECT_EQ(widened.height, 60 - 20 + 1);
+  EXPECT_EQ(pixel(widened, 30, 0), with_reference.reference_colour);  // cell (70, 60): top right
+  EXPECT_EQ(pixel(widened, 5, 60 - 22), with_reference.reference_colour);  // cell (45, 22)
+  // crop_map keeps every cell where it was in the world.
+  const OccupancyMap part = crop_map(map, 40, 20, 10, 5);
+  EXPECT_EQ(part.at(0, 0), OccupancyMap::kFree);
+  EXPECT_NEAR((part.origin.translation() - map.origin.act(Eigen::Vector2d(4.0, 2.0))).norm(), 0.0, 1e-12);
+  EXPECT_THROW(crop_map(map, 95, 0, 10, 5), Error);
+}
+
+TEST(Render, TheScaleBarIsOneTwoOrFiveTimesAPowerOfTenAndAsLongAsItSays) {
+  EXPECT_DOUBLE_EQ(scale_bar_length(400, 0.05), 5.0);   // a quarter: 5 m
+  EXPECT_DOUBLE_EQ(scale_bar_length(400, 0.04), 2.0);   // a quarter is 4 m
+  EXPECT_DOUBLE_EQ(scale_bar_length(1000, 0.1), 20.0);  // 25 m fits 20
+  EXPECT_DOUBLE_EQ(scale_bar_length(100, 0.001), 0.02);
+  EXPECT_EQ(scale_bar_length(0, 0.05), 0.0);
+  // On a free map 400 x 200 cells of 0.05 m: a 5 m bar, 100 pixels of black along one row.
+  OccupancyMap map;
+  map.resolution = 0.05;
+  map.width = 400;
+  map.height = 200;
+  map.cells.assign(80000, OccupancyMap::kFree);
+  const RgbImage image = render_map(map, {}, RenderOptions{.scale_bar = true});
+  int longest = 0;
+  for (int r = image.height / 2; r < image.height; ++r) {
+    int run = 0;
+    for (int c = 0; c < image.width / 2; ++c) {
+      run = pixel(image, c, r) == Rgb{0, 0, 0} ? run + 1 : 0;
+      longest = std::max(longest, run);
+    }
+  }
+  EXPECT_EQ(longest, 100);
+  const RgbImage plain = render_map(map, {}, RenderOptions{});
+  EXPECT_EQ(pixel(plain, 20, 190), (Rgb{255, 255, 255}));  // no bar unless asked
 }
 
 TEST(Render, RejectsBadOptions) {

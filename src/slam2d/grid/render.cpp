@@ -2,8 +2,11 @@
 #include "slam2d/grid/render.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <string>
+#include <string_view>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/ray_casting.hpp"
@@ -90,35 +93,179 @@ void draw_disc(RgbImage& image, const Eigen::Vector2d& centre, int radius, const
   }
 }
 
+// A 5-row bitmap font for the scale bar's label: '#' is ink.
+struct Glyph {
+  char character;
+  std::array<std::string_view, 5> rows;
+};
+constexpr std::array<Glyph, 12> kGlyphs{{
+    {'0', {"###", "#.#", "#.#", "#.#", "###"}}, {'1', {".#.", "##.", ".#.", ".#.", "###"}},
+    {'2', {"###", "..#", "###", "#..", "###"}}, {'3', {"###", "..#", "###", "..#", "###"}},
+    {'4', {"#.#", "#.#", "###", "..#", "..#"}}, {'5', {"###", "#..", "###", "..#", "###"}},
+    {'6', {"###", "#..", "###", "#.#", "###"}}, {'7', {"###", "..#", "..#", "..#", "..#"}},
+    {'8', {"###", "#.#", "###", "#.#", "###"}}, {'9', {"###", "#.#", "###", "..#", "###"}},
+    {'.', {".", ".", ".", ".", "#"}},           {'m', {".....", ".....", "####.", "#.#.#", "#.#.#"}},
+}};
+
+void fill_box(RgbImage& image, int col, int row, int width, int height, const Rgb& colour) {
+  for (int r = row; r < row + height; ++r) {
+    for (int c = col; c < col + width; ++c) paint(image, c, r, colour);
+  }
+}
+
+/// Draws `text` with its top-left corner at (col, row), each font pixel a size x size block, on a
+/// white box one font pixel wider all round; returns the width drawn (pixels).
+int draw_text(RgbImage& image, std::string_view text, int col, int row, int size) {
+  int width = 0;
+  for (const char character : text) {
+    for (const Glyph& glyph : kGlyphs) {
+      if (glyph.character == character) width += static_cast<int>(glyph.rows[0].size() + 1) * size;
+    }
+  }
+  fill_box(image, col - size, row - size, width + size, 7 * size, {255, 255, 255});
+  int x = col;
+  for (const char character : text) {
+    for (const Glyph& glyph : kGlyphs) {
+      if (glyph.character != character) continue;
+      for (int r = 0; r < 5; ++r) {
+        for (std::size_t c = 0; c < glyph.rows[r].size(); ++c) {
+          if (glyph.rows[r][c] == '#') fill_box(image, x + static_cast<int>(c) * size, row + r * size, size, size, {0, 0, 0});
+        }
+      }
+      x += static_cast<int>(glyph.rows[0].size() + 1) * size;
+    }
+  }
+  return width;
+}
+
+void draw_scale_bar(RgbImage& image, double metres_per_pixel) {
+  if (image.width < 60 || image.height < 40) return;
+  const double length = scale_bar_length(image.width, metres_per_pixel);
+  if (length <= 0.0) return;
+  const int size = std::max(2, image.width / 400);  // font pixel and bar thickness unit
+  const int pixels = static_cast<int>(std::lround(length / metres_per_pixel));
+  const int left = 8 * size;
+  const int bottom = image.height - 8 * size;
+  const int thickness = 2 * size;
+  fill_box(image, left - size, bottom - 4 * thickness - size, pixels + 2 * size, 4 * thickness + 2 * size, {255, 255, 255});
+  fill_box(image, left, bottom - thickness, pixels, thickness, {0, 0, 0});
+  fill_box(image, left, bottom - 4 * thickness, size, 4 * thickness, {0, 0, 0});
+  fill_box(image, left + pixels - size, bottom - 4 * thickness, size, 4 * thickness, {0, 0, 0});
+  char label[32];
+  std::snprintf(label, sizeof label, "%gm", length);
+  draw_text(image, label, left, bottom - 4 * thickness - 8 * size, size);
+}
+
+/// The cell holding a map-frame point (may lie outside the map).
+CellIndex cell_of(const OccupancyMap& map, const Eigen::Vector2d& point) {
+  const Eigen::Vector2d local = map.origin.inverse().act(point) / map.resolution;
+  return {static_cast<int>(std::floor(std::clamp(local.x(), -1e9, 1e9))),
+          static_cast<int>(std::floor(std::clamp(local.y(), -1e9, 1e9)))};
+}
+
+/// The map cropped to its known cells and the paths' cells, widened by `margin` cells; the map
+/// itself when nothing is known and no path is given.
+OccupancyMap cropped(const OccupancyMap& map, const std::vector<SE2>& trajectory, const std::vector<SE2>& reference,
+                     int margin) {
+  int x_min = map.width;
+  int y_min = map.height;
+  int x_max = -1;
+  int y_max = -1;
+  const auto extend = [&](int x, int y) {
+    x_min = std::min(x_min, x);
+    y_min = std::min(y_min, y);
+    x_max = std::max(x_max, x);
+    y_max = std::max(y_max, y);
+  };
+  for (int iy = 0; iy < map.height; ++iy) {
+    for (int ix = 0; ix < map.width; ++ix) {
+      if (map.at(ix, iy) != OccupancyMap::kUnknown) extend(ix, iy);
+    }
+  }
+  for (const std::vector<SE2>* path : {&trajectory, &reference}) {
+    for (const SE2& pose : *path) {
+      const CellIndex c = cell_of(map, pose.translation());
+      extend(std::clamp(c.x, 0, map.width - 1), std::clamp(c.y, 0, map.height - 1));
+    }
+  }
+  if (x_max < 0) return map;
+  x_min = std::max(0, x_min - margin);
+  y_min = std::max(0, y_min - margin);
+  x_max = std::min(map.width - 1, x_max + margin);
+  y_max = std::min(map.height - 1, y_max + margin);
+  return crop_map(map, x_min, y_min, x_max - x_min + 1, y_max - y_min + 1);
+}
+
+std::vector<Eigen::Vector2d> pixels_of(const OccupancyMap& map, const std::vector<SE2>& poses, int scale,
+                                       const char* name) {
+  std::vector<Eigen::Vector2d> path;
+  path.reserve(poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    check(poses[i].translation().allFinite(), std::string("render_map: ") + name + " pose " + std::to_string(i) + " is not finite");
+    path.push_back(map_point_to_pixel(map, poses[i].translation(), scale));
+  }
+  return path;
+}
+
 }  // namespace
+
+OccupancyMap crop_map(const OccupancyMap& map, int x0, int y0, int width, int height) {
+  check(x0 >= 0 && y0 >= 0 && width >= 0 && height >= 0 && x0 + width <= map.width && y0 + height <= map.height,
+        "crop_map: the box does not lie within the map");
+  OccupancyMap out;
+  out.resolution = map.resolution;
+  out.origin = map.origin * SE2(x0 * map.resolution, y0 * map.resolution, 0.0);
+  out.width = width;
+  out.height = height;
+  out.cells.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  for (int iy = y0; iy < y0 + height; ++iy) {
+    for (int ix = x0; ix < x0 + width; ++ix) out.cells.push_back(map.at(ix, iy));
+  }
+  return out;
+}
+
+double scale_bar_length(int pixels, double metres_per_pixel) {
+  if (pixels <= 0 || !(metres_per_pixel > 0.0) || !std::isfinite(metres_per_pixel)) return 0.0;
+  const double fits = 0.25 * pixels * metres_per_pixel;
+  double best = 0.0;
+  for (int exponent = -3; exponent <= 6; ++exponent) {
+    for (const double mantissa : {1.0, 2.0, 5.0}) {
+      const double length = mantissa * std::pow(10.0, exponent);
+      if (length <= fits) best = length;
+    }
+  }
+  return best;
+}
 
 Eigen::Vector2d map_point_to_pixel(const OccupancyMap& map, const Eigen::Vector2d& point, int scale) {
   const Eigen::Vector2d local = map.origin.inverse().act(point) / map.resolution;  // in cells
   return {local.x() * scale, (map.height - local.y()) * scale};
 }
 
-RgbImage render_map(const OccupancyMap& map, const std::vector<SE2>& trajectory, const RenderOptions& options) {
+RgbImage render_map(const OccupancyMap& full_map, const std::vector<SE2>& trajectory, const RenderOptions& options) {
   check(options.scale >= 1 && options.scale <= 64, "render_map: scale must lie in [1, 64]");
   check(options.marker_radius >= 0 && options.marker_radius <= 1000, "render_map: marker_radius must lie in [0, 1000]");
-  check(map.width >= 0 && map.height >= 0 &&
-            static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height) == map.cells.size(),
+  check(full_map.width >= 0 && full_map.height >= 0 &&
+            static_cast<std::size_t>(full_map.width) * static_cast<std::size_t>(full_map.height) == full_map.cells.size(),
         "render_map: map size does not match its cells");
-  check(std::isfinite(map.resolution) && map.resolution > 0.0 && map.origin.vector().allFinite(),
+  check(std::isfinite(full_map.resolution) && full_map.resolution > 0.0 && full_map.origin.vector().allFinite(),
         "render_map: map resolution or origin invalid");
+  const OccupancyMap map =
+      options.crop_margin >= 0 ? cropped(full_map, trajectory, options.reference, options.crop_margin) : full_map;
   const long long pixels = static_cast<long long>(map.width) * map.height * options.scale * options.scale;
   check(pixels <= (1LL << 28), "render_map: the picture would exceed 2^28 pixels");
   RgbImage image(map.width * options.scale, map.height * options.scale);
   draw_cells(image, map, options);
-  std::vector<Eigen::Vector2d> path;
-  path.reserve(trajectory.size());
-  for (std::size_t i = 0; i < trajectory.size(); ++i) {
-    check(trajectory[i].translation().allFinite(), "render_map: trajectory pose " + std::to_string(i) + " is not finite");
-    path.push_back(map_point_to_pixel(map, trajectory[i].translation(), options.scale));
+  const std::vector<Eigen::Vector2d> reference = pixels_of(map, options.reference, options.scale, "reference");
+  const std::vector<Eigen::Vector2d> path = pixels_of(map, trajectory, options.scale, "trajectory");
+  if (image.width == 0 || image.height == 0) return image;
+  if (!reference.empty()) draw_polyline(image, reference, options.reference_colour);
+  if (!path.empty()) {
+    draw_polyline(image, path, options.trajectory_colour);
+    draw_disc(image, path.front(), options.marker_radius, options.start_colour);
+    draw_disc(image, path.back(), options.marker_radius, options.end_colour);
   }
-  if (path.empty() || image.width == 0 || image.height == 0) return image;
-  draw_polyline(image, path, options.trajectory_colour);
-  draw_disc(image, path.front(), options.marker_radius, options.start_colour);
-  draw_disc(image, path.back(), options.marker_radius, options.end_colour);
+  if (options.scale_bar) draw_scale_bar(image, map.resolution / options.scale);
   return image;
 }
 

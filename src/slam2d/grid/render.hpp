@@ -26,17 +26,32 @@ struct RenderOptions {
   Rgb start_colour{0, 170, 0};        // filled disc at the first pose
   Rgb end_colour{30, 60, 220};        // filled disc at the last pose
   int marker_radius = 3;              // pixels, >= 0
+  std::vector<SE2> reference{};       // map-frame poses drawn under the trajectory (e.g. ground truth); may be empty
+  Rgb reference_colour{0, 160, 210};
+  int crop_margin = -1;               // cells; >= 0: the picture is cropped to the known cells and both paths, plus this
+  bool scale_bar = false;             // a scale bar with its length in metres at the bottom left
 };
 
 /// The map as an RGB image, row 0 at the top (map row height - 1), each cell a scale x scale
 /// block: occupied black, free white, unknown grey (or, shaded, a grey level 255 (1 - v / 100)).
 /// The trajectory (map-frame poses) is drawn on it as a one-pixel polyline (Bresenham), clipped to
-/// the picture, with discs at its start and end. Throws Error for a non-finite pose, a scale
-/// outside [1, 64], a map whose cells do not match its size, or a picture over 2^28 pixels.
+/// the picture, with discs at its start and end; a reference path, if given, under it in its own
+/// colour. With crop_margin >= 0 the picture covers only the bounding box of the known cells and
+/// of both paths, widened by the margin (and clipped to the map). The scale bar is the longest of
+/// 1, 2 or 5 times a power of ten metres that fits a quarter of the picture's width, labelled in
+/// metres. Throws Error for a non-finite pose, a scale outside [1, 64], a map whose cells do not
+/// match its size, or a picture over 2^28 pixels.
 RgbImage render_map(const OccupancyMap& map, const std::vector<SE2>& trajectory, const RenderOptions& options = {});
 
 /// The picture pixel (column, row) holding a map-frame point, in continuous coordinates: the
 /// pixel is (floor(column), floor(row)).
 Eigen::Vector2d map_point_to_pixel(const OccupancyMap& map, const Eigen::Vector2d& point, int scale);
+
+/// The cells [x0, x0 + width) x [y0, y0 + height) of a map as a map of their own (its origin moved
+/// to cell (x0, y0)); the box must lie within the map.
+OccupancyMap crop_map(const OccupancyMap& map, int x0, int y0, int width, int height);
+
+/// The length (m) of the scale bar render_map draws on a picture `pixels` wide at `metres_per_pixel`.
+double scale_bar_length(int pixels, double metres_per_pixel);
 
 }  // namespace slam2d
