@@ -27,11 +27,9 @@ import statistics
 import subprocess
 import time
 
+from common import run_json
+
 LOGS = ["intel", "aces", "fr079"]
-
-
-def run_json(command):
-    return json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)
 
 
 def unpack_rosbag2(folder, into):

@@ -22,17 +22,10 @@ import argparse
 import json
 import math
 import os
-import subprocess
-import sys
+
+from common import run_json
 
 LOGS = ["intel", "aces", "fr079"]
-
-
-def run_json(command):
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        sys.exit(f"failed (exit {result.returncode}): {' '.join(command)}\n{result.stderr}")
-    return json.loads(result.stdout)
 
 
 def relation_error(args, template, value, log):

@@ -48,12 +48,13 @@ import json
 import math
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
 import time
 import concurrent.futures
+
+from common import fmt, read_trajectory, run, write_atomic
 
 LOGS = {"intel": "intel/intel.clf.gz", "aces": "aces/aces.clf.gz", "fr079": "fr079/fr079.clf.gz"}
 
@@ -162,28 +163,6 @@ def summarize_runs(rows):
 # ---------------------------------------------------------------------------------------------
 # Files.
 
-def write_atomic(path, text):
-    folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-")
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        f.write(text)
-    os.replace(tmp, path)
-
-
-def read_trajectory(path):
-    rows = []
-    with open(path, encoding="utf-8") as f:
-        for number, line in enumerate(f, 1):
-            if line.startswith("#") or not line.strip():
-                continue
-            fields = line.split()
-            if len(fields) != 4:
-                raise ValueError(f"{path}:{number}: expected 't x y theta'")
-            rows.append(tuple(float(v) for v in fields))
-    return rows
-
-
 def open_log(path):
     return gzip.open(path, "rt", encoding="utf-8", errors="replace") if path.endswith(".gz") else open(path, encoding="utf-8")
 
@@ -210,13 +189,6 @@ def time_subset(log, out, duration):
     write_atomic(out, buffer.getvalue())
 
 
-def run(command):
-    result = subprocess.run(["nice"] + command, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise RuntimeError(f"{' '.join(command)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
-    return result.stdout
-
-
 # ---------------------------------------------------------------------------------------------
 # The benchmark.
 
@@ -224,7 +196,7 @@ def reference(args, log):
     """The graph-SLAM map and trajectory of the whole log, made once."""
     folder = os.path.join(args.out, "reference", log)
     if not os.path.exists(os.path.join(folder, "summary.json")):
-        run([args.slam2d, "map", os.path.join(args.data, LOGS[log]), "--method", "graph", "--out", folder, "--quiet", "--json"])
+        run([args.slam2d, "map", os.path.join(args.data, LOGS[log]), "--method", "graph", "--out", folder, "--quiet", "--json"], nice=True)
     return os.path.join(folder, "map.yaml"), read_trajectory(os.path.join(folder, "trajectory.txt"))
 
 
@@ -242,7 +214,7 @@ def run_group(args, log, condition, seed, methods, map_yaml, ref, plain_mcl):
         command = [args.slam2d, "perturb", source, "--out", degraded, "--seed", str(seed), "--quiet", "--json"]
         for spec in faults:
             command += ["--fault", spec]
-        run(command)
+        run(command, nice=True)
     x, y, theta = ref[0][1:]
     rows = []
     try:
@@ -261,7 +233,7 @@ def run_group(args, log, condition, seed, methods, map_yaml, ref, plain_mcl):
                 duration = args.duration or (ref[-1][0] - ref[0][0])
                 kidnap_at = KIDNAP_AT * duration + 10.0 * (seed - 1)
                 command += ["--kidnap-at", f"{kidnap_at:g}", "--kidnap-by", KIDNAP_BY]
-            summary = json.loads(run(command))
+            summary = json.loads(run(command, nice=True))
             trajectory = read_trajectory(trajectory_path)
             os.remove(trajectory_path)
             errors = position_errors(trajectory, ref)
@@ -282,12 +254,6 @@ def run_group(args, log, condition, seed, methods, map_yaml, ref, plain_mcl):
         if degraded != source and os.path.exists(degraded):
             os.remove(degraded)
     return rows
-
-
-def fmt(value, digits=3):
-    if value is None:
-        return "-"
-    return f"{value:.{digits}f}"
 
 
 def markdown(summaries, args):

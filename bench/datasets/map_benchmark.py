@@ -17,8 +17,9 @@ Usage: bench/datasets/map_benchmark.py [--slam2d build/release/bin/slam2d] [--da
 import argparse
 import json
 import os
-import subprocess
 import sys
+
+from common import run_json
 
 LOGS = {
     "intel": ("intel/intel.clf.gz", "intel/intel.relations"),
@@ -27,11 +28,6 @@ LOGS = {
 }
 # Kuemmerle et al. 2009, Table 1, 'scan matching' column: mean translational error (m).
 SCAN_MATCHING_2009 = {"intel": 0.220, "aces": 0.173, "fr079": 0.258}
-
-
-def run_json(command):
-    result = subprocess.run(command, check=True, capture_output=True, text=True)
-    return json.loads(result.stdout)
 
 
 def run_one(args, log, mode):

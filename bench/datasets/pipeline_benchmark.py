@@ -31,29 +31,12 @@ import argparse
 import json
 import math
 import os
-import statistics
-import subprocess
 import sys
+
+from common import run_json, read_trajectory
 
 LOGS = ["intel", "aces", "fr079"]
 TOLERANCE = 0.001  # s, slam2d eval's default stamp tolerance
-
-
-def run_json(command):
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        sys.exit(f"failed: {' '.join(command)}\n{result.stderr}")
-    return json.loads(result.stdout)
-
-
-def read_trajectory(path):
-    poses = []
-    with open(path) as f:
-        for line in f:
-            if line.strip() and not line.startswith("#"):
-                t, x, y, theta = (float(v) for v in line.split()[:4])
-                poses.append((t, x, y, theta))
-    return poses
 
 
 def write_trajectory(path, poses):

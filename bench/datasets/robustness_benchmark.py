@@ -46,8 +46,9 @@ import concurrent.futures
 import gzip
 import json
 import os
-import subprocess
 import sys
+
+from common import run_json, fmt
 
 LOGS = {
     "intel": ("intel/intel.clf.gz", "intel/intel.relations"),
@@ -92,13 +93,6 @@ LOCALIZATION = {
 }
 QUICK = {"logs": ["aces"], "corrected_logs": ["edmonton", "seattle"], "severities": ["severe"],
          "faults": ["stall", "wheel-scale", "decimate", "range-max", "spurious-short"], "methods": ["hector", "pl-icp"]}
-
-
-def run_json(command):
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise RuntimeError(f"exit {result.returncode}: {' '.join(command)}: {result.stderr.strip()[-500:]}")
-    return json.loads(result.stdout)
 
 
 def method_command(args, method, log, out_dir, localization=None):
@@ -285,10 +279,6 @@ def print_public_table(rows):
         print(f"| {r['log']} | {r['fault']} | {r['severity']} | `{r['spec']}` | {r['method']} | {fmt(r['clean_trans_mean_m'])}"
               f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)}"
               f" | {r['relations']}/{r['clean_relations']} |")
-
-
-def fmt(value, digits=3):
-    return "-" if value is None else f"{value:.{digits}f}"
 
 
 # ---------------------------------------------------------------------------------------------

@@ -6,10 +6,12 @@ and the time subset of a CARMEN log."""
 import importlib.util
 import math
 import os
+import sys
 
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "bench", "datasets"))  # as when the script runs: its `common` beside it
 spec = importlib.util.spec_from_file_location("localize_benchmark", os.path.join(ROOT, "bench", "datasets", "localize_benchmark.py"))
 bench = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(bench)
