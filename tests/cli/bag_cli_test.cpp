@@ -20,21 +20,12 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
-struct Run {
-  TempDir dir;
-  std::string log = dir.file("sim.clf");
-  std::string truth = dir.file("truth.txt");
-  Run() {
-    const CommandResult sim = run_command(slam2d("simulate --quiet --duration 30 --seed 7 --out " + log + " --truth " + truth));
-    EXPECT_EQ(sim.exit_code, 0) << sim.errors;
-  }
-};
-
-const Run& run() {
-  static const Run r;
-  return r;
+// 30 s of the simulated office, shared by the tests of this file.
+const test::SimulatedLog& run() {
+  static const test::SimulatedLog simulated(30, 7);
+  return simulated;
 }
 
 Trajectory map_trajectory(const std::string& log, const TempDir& out, const std::string& name) {
@@ -56,7 +47,7 @@ TEST(BagCli, ConvertToEveryBagFormatAndBackMapsTheSame) {
   TempDir out;
   std::map<std::string, Trajectory> trajectories;
   for (const std::string name : {"sim.mcap", "sim_rosbag2", "sim.bag"}) {
-    const CommandResult converted = run_command(slam2d("convert --json " + run().log + " " + out.file(name)));
+    const CommandResult converted = run_command(slam2d("convert --json " + run().log() + " " + out.file(name)));
     ASSERT_EQ(converted.exit_code, 0) << name << ": " << converted.errors;
     EXPECT_NEAR(*json_number(converted.output, "scans"), 300, 2) << name;
     trajectories[name] = map_trajectory(out.file(name), out, name + "_map");
@@ -70,7 +61,7 @@ TEST(BagCli, ConvertToEveryBagFormatAndBackMapsTheSame) {
   ASSERT_EQ(run_command(slam2d("convert --quiet " + out.file("sim.mcap") + " " + out.file("back.clf"))).exit_code, 0);
   expect_same(trajectories["sim.mcap"], map_trajectory(out.file("back.clf"), out, "back_map"), "mcap vs mcap -> carmen");
   // The bag's run is close to the CARMEN log's (the bag interpolates the odometry readings at each scan).
-  const Trajectory carmen = map_trajectory(run().log, out, "carmen_map");
+  const Trajectory carmen = map_trajectory(run().log(), out, "carmen_map");
   ASSERT_EQ(carmen.size(), trajectories["sim.mcap"].size());
   for (std::size_t i = 0; i < carmen.size(); ++i) {
     EXPECT_LT((carmen[i].pose.translation() - trajectories["sim.mcap"][i].pose.translation()).norm(), 0.1) << i;
@@ -82,10 +73,10 @@ TEST(BagCli, ConvertRefusesWhatItCannotDo) {
   const CommandResult missing = run_command(slam2d("convert " + out.file("none.bag") + " " + out.file("x.mcap")));
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.errors.find("none.bag"), std::string::npos) << missing.errors;
-  const CommandResult format = run_command(slam2d("convert --to zip " + run().log + " " + out.file("x")));
+  const CommandResult format = run_command(slam2d("convert --to zip " + run().log() + " " + out.file("x")));
   EXPECT_NE(format.exit_code, 0);
   std::filesystem::create_directories(out.path() / "notabag");
-  const CommandResult folder = run_command(slam2d("convert " + run().log + " " + out.file("notabag")));
+  const CommandResult folder = run_command(slam2d("convert " + run().log() + " " + out.file("notabag")));
   EXPECT_NE(folder.exit_code, 0);
   EXPECT_NE(folder.errors.find("not a rosbag2 folder"), std::string::npos) << folder.errors;
   EXPECT_FALSE(std::filesystem::exists(out.path() / "x.mcap"));
@@ -129,13 +120,13 @@ void expect_run_mcap(const std::string& path, const Trajectory& trajectory) {
 TEST(BagCli, MapAndLocalizeWriteTheirRunForFoxglove) {
   TempDir out;
   const CommandResult mapped = run_command(slam2d("map --quiet --method graph --out " + out.file("map") + " --mcap " +
-                                                  out.file("map.mcap") + " " + run().log));
+                                                  out.file("map.mcap") + " " + run().log()));
   ASSERT_EQ(mapped.exit_code, 0) << mapped.errors;
   expect_run_mcap(out.file("map.mcap"), read_trajectory(out.file("map/trajectory.txt")));
 
   const CommandResult localized = run_command(slam2d("localize --quiet --method mcl --global --particles 500 --seed 1 --map " + out.file("map/map.yaml") +
                                                      " --out " + out.file("ekf.txt") + " --mcap " + out.file("ekf.mcap") +
-                                                     " " + run().log));
+                                                     " " + run().log()));
   ASSERT_EQ(localized.exit_code, 0) << localized.errors;
   expect_run_mcap(out.file("ekf.mcap"), read_trajectory(out.file("ekf.txt")));
 }

@@ -25,7 +25,7 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path);
@@ -46,18 +46,13 @@ std::string read_text(const std::string& path) {
 // A simulated log shared by the tests of this file (simulated once).
 class CliTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir();
-    const CommandResult result = run_command(slam2d("simulate --quiet --duration 30 --seed 5 --out " + log() +
-                                                    " --truth " + truth()));
-    ASSERT_EQ(result.exit_code, 0) << result.errors;
-  }
-  static void TearDownTestSuite() { delete dir_; }
-  static std::string log() { return dir_->file("sim.clf"); }
-  static std::string truth() { return dir_->file("truth.txt"); }
-  static TempDir* dir_;
+  static void SetUpTestSuite() { sim_ = new test::SimulatedLog(30, 5); }
+  static void TearDownTestSuite() { delete sim_; }
+  static std::string log() { return sim_->log(); }
+  static std::string truth() { return sim_->truth(); }
+  static test::SimulatedLog* sim_;
 };
-TempDir* CliTest::dir_ = nullptr;
+test::SimulatedLog* CliTest::sim_ = nullptr;
 
 TEST_F(CliTest, InfoReportsTheSimulatedLog) {
   const CommandResult result = run_command(slam2d("info --json " + log()));

@@ -28,7 +28,7 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 World box_world(const std::string& name, const std::vector<WallSegment>& walls, std::vector<Eigen::Vector2d> route) {
   World world;

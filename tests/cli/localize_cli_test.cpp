@@ -20,21 +20,19 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 // A 60 s simulated run, its odometry map (the odometry starts at the true start pose, so the
 // map frame is the world frame) and the true start pose as "x,y,theta".
 struct Fixture {
-  TempDir dir;
-  std::string log = dir.file("office.clf");
-  std::string truth = dir.file("truth.txt");
-  std::string map = dir.file("map/map.yaml");
+  test::SimulatedLog sim{60, 3};
+  std::string log = sim.log();
+  std::string truth = sim.truth();
+  std::string map = sim.dir().file("map/map.yaml");
   std::string start;
 
   Fixture() {
-    const CommandResult sim = run_command(slam2d("simulate --out " + log + " --truth " + truth + " --duration 60 --seed 3"));
-    EXPECT_EQ(sim.exit_code, 0) << sim.errors;
-    const CommandResult mapped = run_command(slam2d("map " + log + " --method odometry --out " + dir.file("map") + " --quiet"));
+    const CommandResult mapped = run_command(slam2d("map " + log + " --method odometry --out " + sim.dir().file("map") + " --quiet"));
     EXPECT_EQ(mapped.exit_code, 0) << mapped.errors;
     std::ifstream in(truth);
     std::string line;

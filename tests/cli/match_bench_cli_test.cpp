@@ -29,24 +29,11 @@ using test::CommandResult;
 using test::TempDir;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-// 40 s of the simulated office (10 Hz scans) and its true trajectory.
-struct SimulatedRun {
-  std::string log;
-  std::string truth;
-};
-
-SimulatedRun simulate(const TempDir& dir) {
-  SimulatedRun run{dir.file("office.clf"), dir.file("truth.txt")};
-  const CommandResult result = run_command(slam2d("simulate --quiet --duration 40 --out " + run.log + " --truth " + run.truth));
-  EXPECT_EQ(result.exit_code, 0) << result.errors;
-  return run;
 }
 
 // One row of cases.csv, by column name.
@@ -101,9 +88,9 @@ Cell cell(const std::vector<CsvRow>& rows, const std::string& matcher, const std
 const char* kLevels = "0.05:2,0.2:10,0.5:20";
 const char* kLevelNames[] = {"0.05m_2deg", "0.2m_10deg", "0.5m_20deg"};
 
-CommandResult bench(const SimulatedRun& run, const std::string& reference, const std::string& out,
+CommandResult bench(const test::SimulatedLog& run, const std::string& reference, const std::string& out,
                     const std::string& extra = "") {
-  return run_command(slam2d("match-bench " + run.log + " --reference " + reference +
+  return run_command(slam2d("match-bench " + run.log() + " --reference " + reference +
                             " --matchers pl-icp,icp --levels " + kLevels + " --pairs 30 --quiet --out " + out + " " +
                             extra));
 }
@@ -122,8 +109,8 @@ std::string csv_without_time(const std::string& path) {
 
 TEST(MatchBenchCli, AGoodMatcherSucceedsAtALowLevelAndLessAsTheLevelGrows) {
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
-  const CommandResult result = bench(run, run.truth, dir.file("out"));
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
+  const CommandResult result = bench(run, run.truth(), dir.file("out"));
   ASSERT_EQ(result.exit_code, 0) << result.errors;
   const std::vector<CsvRow> rows = read_csv(dir.file("out/cases.csv"));
   ASSERT_EQ(rows.size(), 30u * 3u * 2u);  // pairs x levels x matchers
@@ -137,19 +124,19 @@ TEST(MatchBenchCli, AGoodMatcherSucceedsAtALowLevelAndLessAsTheLevelGrows) {
   EXPECT_LE(hard.success_rate, easy.success_rate - 0.2);
   EXPECT_LT(easy.mean_trans_error, hard.mean_trans_error);
   // The text output says what the reference is, and gives every level.
-  EXPECT_NE(result.output.find("reference: trajectory " + run.truth), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("reference: trajectory " + run.truth()), std::string::npos) << result.output;
   for (const char* level : kLevelNames) EXPECT_NE(result.output.find(level), std::string::npos) << level;
 }
 
 TEST(MatchBenchCli, ErrorsAreMeasuredAgainstTheReferenceGiven) {
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
-  ASSERT_EQ(bench(run, run.truth, dir.file("truth_out")).exit_code, 0);
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
+  ASSERT_EQ(bench(run, run.truth(), dir.file("truth_out")).exit_code, 0);
   const std::vector<CsvRow> rows = read_csv(dir.file("truth_out/cases.csv"));
   ASSERT_FALSE(rows.empty());
 
   // Every row's true relative pose is the truth's, and its errors are those of its estimate.
-  const Trajectory truth = read_trajectory(run.truth);
+  const Trajectory truth = read_trajectory(run.truth());
   const StampIndex index(truth);
   for (const CsvRow& row : rows) {
     const auto target = index.nearest(number(row, "target_stamp"), 1e-6);
@@ -184,10 +171,10 @@ TEST(MatchBenchCli, ErrorsAreMeasuredAgainstTheReferenceGiven) {
 
 TEST(MatchBenchCli, JsonIsValidAgreesWithTheCsvAndTheSameSeedGivesTheSameResults) {
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
-  const CommandResult a = bench(run, run.truth, dir.file("a"), "--json --seed 4");
-  const CommandResult b = bench(run, run.truth, dir.file("b"), "--seed 4");
-  const CommandResult c = bench(run, run.truth, dir.file("c"), "--seed 5");
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
+  const CommandResult a = bench(run, run.truth(), dir.file("a"), "--json --seed 4");
+  const CommandResult b = bench(run, run.truth(), dir.file("b"), "--seed 4");
+  const CommandResult c = bench(run, run.truth(), dir.file("c"), "--seed 5");
   ASSERT_EQ(a.exit_code, 0) << a.errors;
   ASSERT_EQ(b.exit_code, 0) << b.errors;
   ASSERT_EQ(c.exit_code, 0) << c.errors;
@@ -216,27 +203,27 @@ TEST(MatchBenchCli, JsonIsValidAgreesWithTheCsvAndTheSameSeedGivesTheSameResults
 
 TEST(MatchBenchCli, RawOdometryIsAReferenceOnlyWhenAskedForAndIsLabelled) {
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
   const CommandResult odometry = bench(run, "odometry", dir.file("odo"), "--json");
   ASSERT_EQ(odometry.exit_code, 0) << odometry.errors;
   EXPECT_NE(odometry.output.find("\"kind\": \"odometry\""), std::string::npos) << odometry.output;
   EXPECT_NE(odometry.output.find("\"ground_truth\": false"), std::string::npos) << odometry.output;
   EXPECT_NE(odometry.output.find("RAW ODOMETRY"), std::string::npos);
   const CommandResult text = bench(run, "odometry", dir.file("odo_text"));
-  EXPECT_NE(text.output.find("reference: RAW ODOMETRY of " + run.log + ", not ground truth"), std::string::npos)
+  EXPECT_NE(text.output.find("reference: RAW ODOMETRY of " + run.log() + ", not ground truth"), std::string::npos)
       << text.output;
   // The simulated log's scan poses are its odometry: refused as a "corrected" log, by name.
   const CommandResult corrected = bench(run, "corrected", dir.file("corrected"));
   EXPECT_EQ(corrected.exit_code, 1);
-  EXPECT_EQ(corrected.errors.rfind(run.log + ": its scan poses are its odometry", 0), 0u) << corrected.errors;
+  EXPECT_EQ(corrected.errors.rfind(run.log() + ": its scan poses are its odometry", 0), 0u) << corrected.errors;
   EXPECT_FALSE(std::filesystem::exists(dir.file("corrected")));
 }
 
 TEST(MatchBenchCli, AMissingOrWrongReferenceAndBadLevelsAreClearErrors) {
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
   // No --reference: no silent default.
-  const CommandResult missing = run_command(slam2d("match-bench " + run.log + " --matchers icp --quiet"));
+  const CommandResult missing = run_command(slam2d("match-bench " + run.log() + " --matchers icp --quiet"));
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.errors.find("--reference"), std::string::npos) << missing.errors;
   // A reference file that does not exist is named.
@@ -244,7 +231,7 @@ TEST(MatchBenchCli, AMissingOrWrongReferenceAndBadLevelsAreClearErrors) {
   EXPECT_EQ(absent.exit_code, 1);
   EXPECT_NE(absent.errors.find(dir.file("nowhere.txt")), std::string::npos) << absent.errors;
 
-  const Trajectory truth = read_trajectory(run.truth);
+  const Trajectory truth = read_trajectory(run.truth());
   // Another time base: no scan has a reference pose.
   Trajectory shifted_in_time, first_third;
   for (std::size_t i = 0; i < truth.size(); ++i) {
@@ -269,7 +256,7 @@ TEST(MatchBenchCli, AMissingOrWrongReferenceAndBadLevelsAreClearErrors) {
 
   for (const char* levels : {"0.1", "a:b", "0.1:-5", "0.1:5,", "0.1:5x", "nan:1", "0.1:5,0.1:5"}) {
     SCOPED_TRACE(levels);
-    const CommandResult bad = run_command(slam2d("match-bench " + run.log + " --reference " + run.truth +
+    const CommandResult bad = run_command(slam2d("match-bench " + run.log() + " --reference " + run.truth() +
                                                  " --matchers icp --quiet --levels '" + levels + "' --out " +
                                                  dir.file("o5")));
     EXPECT_EQ(bad.exit_code, 1);
@@ -281,16 +268,16 @@ TEST(MatchBenchCli, AMissingOrWrongReferenceAndBadLevelsAreClearErrors) {
 TEST(MatchBenchCli, TheCdfScriptDrawsTheCasesAndRefusesOtherFiles) {
   if (run_command("/usr/bin/python3 -c 'import matplotlib, numpy'").exit_code != 0) GTEST_SKIP() << "no python3 with matplotlib";
   TempDir dir;
-  const SimulatedRun run = simulate(dir);
-  ASSERT_EQ(bench(run, run.truth, dir.file("out")).exit_code, 0);
+  const test::SimulatedLog run(40, std::nullopt);  // 40 s of the simulated office (10 Hz scans)
+  ASSERT_EQ(bench(run, run.truth(), dir.file("out")).exit_code, 0);
   const CommandResult drawn = run_command("/usr/bin/python3 bench/datasets/match_bench_cdf.py " + dir.file("out/cases.csv") +
                                           " --out " + dir.file("cdf.png") + " --title test");
   ASSERT_EQ(drawn.exit_code, 0) << drawn.errors;
   EXPECT_EQ(file_bytes(dir.file("cdf.png")).substr(1, 3), "PNG");
-  const CommandResult refused = run_command("/usr/bin/python3 bench/datasets/match_bench_cdf.py " + run.truth + " --out " +
+  const CommandResult refused = run_command("/usr/bin/python3 bench/datasets/match_bench_cdf.py " + run.truth() + " --out " +
                                             dir.file("bad.png"));
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_NE(refused.errors.find(run.truth), std::string::npos) << refused.errors;
+  EXPECT_NE(refused.errors.find(run.truth()), std::string::npos) << refused.errors;
   EXPECT_FALSE(std::filesystem::exists(dir.file("bad.png")));
 }
 

@@ -22,7 +22,7 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 // A 2 m square in four 1 m sides whose odometry says 1.1 m, closed by a loop edge to the start.
 const char* const kSquare =

@@ -20,24 +20,18 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// 40 s of the simulated office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0.
-std::string simulated_log(const TempDir& dir) {
-  const std::string log = dir.file("office.clf");
-  const CommandResult result = run_command(slam2d("simulate --quiet --duration 40 --out " + log));
-  EXPECT_EQ(result.exit_code, 0) << result.errors;
-  return log;
-}
 
 TEST(PerturbCli, StallSummaryCountsTheWindows) {
   TempDir dir;
-  const std::string log = simulated_log(dir);
+  const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0
+  const std::string log = simulated.log();
   const std::string out = dir.file("stalled.clf");
   const CommandResult result =
       run_command(slam2d("perturb " + log + " --out " + out + " --fault stall:every=10,duration=1.2 --fault decimate:k=2 --seed 3 --json"));
@@ -54,7 +48,8 @@ TEST(PerturbCli, StallSummaryCountsTheWindows) {
 
 TEST(PerturbCli, SameSeedSameBytesOtherSeedOtherBytes) {
   TempDir dir;
-  const std::string log = simulated_log(dir);
+  const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0
+  const std::string log = simulated.log();
   const std::string faults = " --fault range-noise:sigma=0.02 --fault jitter --quiet";
   for (const char* name : {"a.clf", "b.clf"}) {
     const CommandResult result = run_command(slam2d("perturb " + log + " --out " + dir.file(name) + faults + " --seed 5"));
@@ -68,7 +63,8 @@ TEST(PerturbCli, SameSeedSameBytesOtherSeedOtherBytes) {
 
 TEST(PerturbCli, GzipOutputAndGeometryReadBack) {
   TempDir dir;
-  const std::string log = simulated_log(dir);
+  const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0
+  const std::string log = simulated.log();
   const std::string out = dir.file("short.clf.gz");
   const CommandResult result =
       run_command(slam2d("perturb " + log + " --out " + out + " --fault beams:k=2 --fault range-max:max=5.6 --quiet"));
@@ -87,7 +83,8 @@ TEST(PerturbCli, GzipOutputAndGeometryReadBack) {
 
 TEST(PerturbCli, BadSpecsExitOneWithAReasonAndNoOutput) {
   TempDir dir;
-  const std::string log = simulated_log(dir);
+  const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0
+  const std::string log = simulated.log();
   const std::string out = dir.file("never.clf");
   for (const std::string& spec : {std::string("wobble"), std::string("stall:lenght=2"), std::string("stall:every=x"),
                                   std::string("duplicate:p=2"), std::string("decimate:k=0.5")}) {

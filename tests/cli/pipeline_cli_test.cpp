@@ -25,20 +25,15 @@ using test::TempDir;
 using test::json_number;
 using test::run_command;
 
-std::string slam2d(const std::string& arguments) { return test::cli_command(arguments); }
+using test::slam2d;
 
 class PipelineCli : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir();
-    const CommandResult result = run_command(slam2d("simulate --quiet --duration 60 --seed 3 --out " + log() +
-                                                    " --truth " + truth()));
-    ASSERT_EQ(result.exit_code, 0) << result.errors;
-  }
-  static void TearDownTestSuite() { delete dir_; }
-  static std::string log() { return dir_->file("sim.clf"); }
-  static std::string truth() { return dir_->file("truth.txt"); }
-  static TempDir* dir_;
+  static void SetUpTestSuite() { sim_ = new test::SimulatedLog(60, 3); }
+  static void TearDownTestSuite() { delete sim_; }
+  static std::string log() { return sim_->log(); }
+  static std::string truth() { return sim_->truth(); }
+  static test::SimulatedLog* sim_;
 
   static CommandResult map(const TempDir& out, const std::string& arguments) {
     return run_command(slam2d("map --quiet --json " + log() + " --out " + out.path().string() + " " + arguments));
@@ -47,7 +42,7 @@ class PipelineCli : public ::testing::Test {
     return absolute_trajectory_error(read_trajectory(trajectory), read_trajectory(truth())).rmse;
   }
 };
-TempDir* PipelineCli::dir_ = nullptr;
+test::SimulatedLog* PipelineCli::sim_ = nullptr;
 
 TEST_F(PipelineCli, ATrajectoryAsOdometryIsWhatTheScansCarry) {
   // Mapping by "odometry" from the truth gives back the truth; from the log, the log's drift.

@@ -91,6 +91,14 @@ std::string cli_path() {
 
 std::string cli_command(const std::string& arguments) { return "'" + cli_path() + "' " + arguments; }
 
+SimulatedLog::SimulatedLog(double duration, std::optional<unsigned> seed, const std::string& name)
+    : log_(dir_.file(name)), truth_(dir_.file("truth.txt")) {
+  std::string arguments = "simulate --quiet --duration " + std::to_string(duration) + " --out '" + log_ + "' --truth '" + truth_ + "'";
+  if (seed) arguments += " --seed " + std::to_string(*seed);
+  const CommandResult result = run_command(cli_command(arguments));
+  EXPECT_EQ(result.exit_code, 0) << result.errors;
+}
+
 CommandResult run_command(const std::string& command) {
   TempDir dir;
   const auto out = dir.path() / "stdout";

@@ -42,6 +42,8 @@ std::filesystem::path unpack_rosbag2(const std::filesystem::path& folder, const 
 std::string cli_path();
 /// A shell command running the slam2d tool with `arguments`.
 std::string cli_command(const std::string& arguments);
+/// The same, under the name the command-line tests read best: run_command(slam2d("map ...")).
+inline std::string slam2d(const std::string& arguments) { return cli_command(arguments); }
 
 /// Runs a shell command, returns its exit status; stdout and stderr are captured.
 struct CommandResult {
@@ -50,6 +52,22 @@ struct CommandResult {
   std::string errors;  // stderr
 };
 CommandResult run_command(const std::string& command);
+
+/// A simulated office log and its ground truth in a folder of their own: `slam2d simulate --quiet
+/// --duration DURATION [--seed SEED] --out DIR/NAME --truth DIR/truth.txt`. A failed simulation
+/// fails the test that made it.
+class SimulatedLog {
+ public:
+  SimulatedLog(double duration, std::optional<unsigned> seed, const std::string& name = "office.clf");
+  const std::string& log() const { return log_; }
+  const std::string& truth() const { return truth_; }
+  const TempDir& dir() const { return dir_; }
+
+ private:
+  TempDir dir_;
+  std::string log_;
+  std::string truth_;
+};
 
 /// The number stored under "key" in a JSON text (first occurrence, any depth); nullopt if absent
 /// or not a number. Enough for the flat summaries the CLI prints.
