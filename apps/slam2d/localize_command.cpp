@@ -26,10 +26,28 @@
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
+#include "slam2d/grid/render.hpp"
+#include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/session.hpp"
 
 namespace slam2d::cli {
 namespace {
+
+// --png: the map cropped to what is known, the run on it (lost stretches in their own colour), the
+// last estimate's 2-sigma position ellipse and, for MCL, its particles at the end.
+RgbImage run_picture(const OccupancyMap& map, const LocalizationSession& session, const LocalizationEstimate& last,
+                     const Localizer& localizer) {
+  RenderOptions picture{.crop_margin = 20, .scale_bar = true};
+  std::vector<SE2> poses;
+  poses.reserve(session.trajectory().size());
+  for (const StampedPose& stamped : session.trajectory()) poses.push_back(stamped.pose);
+  for (const bool localized : session.localized()) picture.lost.push_back(!localized);
+  picture.end_covariance = last.covariance.topLeftCorner<2, 2>();
+  if (const auto* mcl = dynamic_cast<const MonteCarloLocalization*>(&localizer)) {
+    for (const SE2& particle : mcl->particles()) picture.points.push_back(particle.translation());
+  }
+  return render_map(map, poses, picture);
+}
 
 void run_localize(const LocalizeOptions& options) {
   const RunClock clock;
@@ -45,13 +63,14 @@ void run_localize(const LocalizeOptions& options) {
   LocalizationSession session(*localizer, kidnap, OdometryGuardConfig{}, &map);
   LogReader reader(options.log, options.input);
   Progress progress("localize", options.quiet);
+  LocalizationEstimate last;
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
     if (!laser->has_poses) {
       throw ParseError(reader.path(), laser->line, laser->type + " carries no odometry pose; localization needs odometry");
     }
-    session.add(laser->odom_pose, laser->scan);
+    last = session.add(laser->odom_pose, laser->scan);
     if (session.summary().scans % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans, localized: {}", session.summary().scans,
                                                      session.localized().back() ? "yes" : "no"));
@@ -65,6 +84,7 @@ void run_localize(const LocalizeOptions& options) {
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   write_trajectory(options.out, session.trajectory(), trajectory_format_from_name(options.trajectory_format));
   if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, true, occupancy, session.trajectory());
+  if (!options.png.empty()) write_png(options.png, run_picture(occupancy, session, last, *localizer));
 
   const double cpu = clock.cpu_seconds();
   JsonObject summary;
@@ -115,6 +135,9 @@ void add_localize_command(CLI::App& app) {
       ->capture_default_str();
   add_sensor_options(command, options->input);
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
+  command->add_option("--png", options->png,
+                      "Also draw the run on the map: localized stretches red, lost ones orange, the final 2-sigma "
+                      "ellipse, and MCL's particles");
   command->add_option("--mcap", options->mcap,
                       "Also write the run for Foxglove: map, path, poses, scans (and in the map frame), tf (MCAP, ROS 2 types)");
   command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")

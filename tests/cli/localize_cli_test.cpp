@@ -54,8 +54,13 @@ TEST(LocalizeCli, MclTracksTheSimulatedRunAndReportsItsSummary) {
   TempDir out;
   const std::string traj = out.file("mcl.txt");
   const CommandResult result = run_command(slam2d("localize " + f.log + " --map " + f.map + " --method mcl --initial " +
-                                                  f.start + " --particles 2000 --seed 2 --out " + traj + " --json --quiet"));
+                                                  f.start + " --particles 2000 --seed 2 --out " + traj +
+                                                  " --png " + out.file("run.png") + " --json --quiet"));
   ASSERT_EQ(result.exit_code, 0) << result.errors;
+  std::ifstream picture(out.file("run.png"), std::ios::binary);
+  std::string signature(8, '\0');
+  picture.read(signature.data(), 8);
+  EXPECT_EQ(signature, "\x89PNG\r\n\x1a\n");  // --png wrote the run's picture
   for (const char* key : {"scans", "cpu_s", "us_per_update", "converged_at_s", "lost_events"}) {
     EXPECT_TRUE(json_number(result.output, key).has_value()) << key << " in " << result.output;
   }

@@ -153,6 +153,29 @@ TEST(Render, TheScaleBarIsOneTwoOrFiveTimesAPowerOfTenAndAsLongAsItSays) {
   EXPECT_EQ(pixel(plain, 20, 190), (Rgb{255, 255, 255}));  // no bar unless asked
 }
 
+TEST(Render, LostStretchesPointsAndTheEndEllipse) {
+  // test_map(): 10 x 6 cells of 1 m, scale 4. A path along y = 3.5 whose second segment is lost.
+  RenderOptions options{.scale = 4, .marker_radius = 0};
+  const std::vector<SE2> path{SE2(0.5, 3.5, 0.0), SE2(2.5, 3.5, 0.0), SE2(4.5, 3.5, 0.0), SE2(6.5, 3.5, 0.0)};
+  options.lost = {false, false, true, false};  // segments 1-2 and 2-3 touch the lost pose
+  options.points = {Eigen::Vector2d(8.5, 1.5)};
+  options.end_covariance = Eigen::Vector2d(0.25, 0.0625).asDiagonal();  // sigma 0.5 m along x, 0.25 m along y
+  const RgbImage image = render_map(test_map(), path, options);
+  const int row = (6 * 4) - static_cast<int>(3.5 * 4);  // picture row of y = 3.5
+  EXPECT_EQ(pixel(image, 6, row), options.trajectory_colour);   // x = 1.5: the first segment
+  EXPECT_EQ(pixel(image, 14, row), options.lost_colour);        // x = 3.5
+  EXPECT_EQ(pixel(image, 20, row), options.lost_colour);        // x = 5.0
+  EXPECT_EQ(pixel(image, 34, 18), options.points_colour);       // (8.5, 1.5): pixel (34, 18)
+  // The 2-sigma ellipse around (6.5, 3.5), pixel (26, row): 1 m = 4 pixels either side along x,
+  // 0.5 m = 2 along y, and nothing beyond.
+  EXPECT_EQ(pixel(image, 26 + 4, row), options.end_colour);
+  EXPECT_EQ(pixel(image, 26 + 5, row), options.free_colour);
+  EXPECT_EQ(pixel(image, 26, row - 2), options.end_colour);
+  EXPECT_EQ(pixel(image, 26, row + 2), options.end_colour);
+  EXPECT_EQ(pixel(image, 26, row - 4), options.free_colour);
+  EXPECT_THROW(render_map(test_map(), path, RenderOptions{.lost = {true}}), Error);
+}
+
 TEST(Render, RejectsBadOptions) {
   EXPECT_THROW(render_map(test_map(), {}, RenderOptions{.scale = 0}), Error);
   OccupancyMap broken = test_map();

@@ -5,8 +5,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <string_view>
+
+#include <Eigen/Eigenvalues>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/ray_casting.hpp"
@@ -82,6 +85,23 @@ void draw_polyline(RgbImage& image, const std::vector<Eigen::Vector2d>& pixels, 
     for_each_cell_before(pixel_of(a), to, [&](CellIndex p) { paint(image, p.x, p.y, colour); });
     paint(image, to.x, to.y, colour);
   }
+}
+
+/// The 2-sigma ellipse of a 2x2 covariance (m^2) around `centre` (pixels), `pixels_per_metre`.
+void draw_ellipse(RgbImage& image, const Eigen::Vector2d& centre, const Eigen::Matrix2d& covariance,
+                  double pixels_per_metre, const Rgb& colour) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(0.5 * (covariance + covariance.transpose()));
+  const Eigen::Vector2d radii = 2.0 * solver.eigenvalues().cwiseMax(0.0).cwiseSqrt() * pixels_per_metre;
+  if (!radii.allFinite() || radii.maxCoeff() > 1e5) return;
+  const Eigen::Matrix2d axes = solver.eigenvectors();
+  std::vector<Eigen::Vector2d> outline;
+  constexpr int kSteps = 72;
+  for (int k = 0; k <= kSteps; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / kSteps;
+    const Eigen::Vector2d metric = axes * Eigen::Vector2d(radii.x() * std::cos(a), radii.y() * std::sin(a));
+    outline.push_back(centre + Eigen::Vector2d(metric.x(), -metric.y()));  // picture rows grow downwards
+  }
+  draw_polyline(image, outline, colour);
 }
 
 void draw_disc(RgbImage& image, const Eigen::Vector2d& centre, int radius, const Rgb& colour) {
@@ -260,8 +280,22 @@ RgbImage render_map(const OccupancyMap& full_map, const std::vector<SE2>& trajec
   const std::vector<Eigen::Vector2d> path = pixels_of(map, trajectory, options.scale, "trajectory");
   if (image.width == 0 || image.height == 0) return image;
   if (!reference.empty()) draw_polyline(image, reference, options.reference_colour);
+  for (const Eigen::Vector2d& point : options.points) {
+    if (!point.allFinite()) continue;
+    const CellIndex p = pixel_of(map_point_to_pixel(map, point, options.scale).cwiseMax(-1e6).cwiseMin(1e6));
+    paint(image, p.x, p.y, options.points_colour);
+  }
   if (!path.empty()) {
     draw_polyline(image, path, options.trajectory_colour);
+    check(options.lost.empty() || options.lost.size() == path.size(), "render_map: lost must be empty or one per trajectory pose");
+    for (std::size_t i = 0; i + 1 < options.lost.size(); ++i) {
+      if (options.lost[i] || options.lost[i + 1]) draw_polyline(image, {path[i], path[i + 1]}, options.lost_colour);
+    }
+    if (!options.end_covariance.isZero()) {
+      const Eigen::Matrix2d R = map.origin.rotation();  // the covariance in the grid's axes
+      draw_ellipse(image, path.back(), R.transpose() * options.end_covariance * R, options.scale / map.resolution,
+                   options.end_colour);
+    }
     draw_disc(image, path.front(), options.marker_radius, options.start_colour);
     draw_disc(image, path.back(), options.marker_radius, options.end_colour);
   }

@@ -28,6 +28,11 @@ struct RenderOptions {
   int marker_radius = 3;              // pixels, >= 0
   std::vector<SE2> reference{};       // map-frame poses drawn under the trajectory (e.g. ground truth); may be empty
   Rgb reference_colour{0, 160, 210};
+  std::vector<bool> lost{};           // empty, or one per trajectory pose: a segment touching a lost pose is lost_colour
+  Rgb lost_colour{255, 140, 0};
+  std::vector<Eigen::Vector2d> points{};   // map-frame points drawn as single pixels (e.g. a particle filter's particles)
+  Rgb points_colour{150, 0, 170};
+  Eigen::Matrix2d end_covariance = Eigen::Matrix2d::Zero();  // m^2 of the last pose; non-zero: its 2-sigma ellipse is drawn
   int crop_margin = -1;               // cells; >= 0: the picture is cropped to the known cells and both paths, plus this
   bool scale_bar = false;             // a scale bar with its length in metres at the bottom left
 };
@@ -36,7 +41,8 @@ struct RenderOptions {
 /// block: occupied black, free white, unknown grey (or, shaded, a grey level 255 (1 - v / 100)).
 /// The trajectory (map-frame poses) is drawn on it as a one-pixel polyline (Bresenham), clipped to
 /// the picture, with discs at its start and end; a reference path, if given, under it in its own
-/// colour. With crop_margin >= 0 the picture covers only the bounding box of the known cells and
+/// colour. Segments that touch a pose flagged in `lost` are drawn in lost_colour; `points` as
+/// single pixels; a non-zero end_covariance as the 2-sigma ellipse around the last pose. With crop_margin >= 0 the picture covers only the bounding box of the known cells and
 /// of both paths, widened by the margin (and clipped to the map). The scale bar is the longest of
 /// 1, 2 or 5 times a power of ten metres that fits a quarter of the picture's width, labelled in
 /// metres. Throws Error for a non-finite pose, a scale outside [1, 64], a map whose cells do not
