@@ -40,8 +40,12 @@ struct EvalOptions {
   bool json = false;
 };
 
-/// A table of numbers, column by column.
+/// A table of numbers, column by column (the header is there even with no row).
 struct ErrorTable {
+  ErrorTable() = default;
+  explicit ErrorTable(const std::vector<std::string>& names) {
+    for (const std::string& name : names) columns.emplace_back(name, std::vector<double>());
+  }
   std::vector<std::pair<std::string, std::vector<double>>> columns;
   std::vector<double>& column(const std::string& name) {
     for (auto& [key, values] : columns) {
@@ -68,7 +72,7 @@ struct ErrorTable {
 };
 
 ErrorTable relation_table(const RelationErrorResult& result, const std::vector<Relation>& relations) {
-  ErrorTable table;
+  ErrorTable table({"stamp_from", "stamp_to", "x_from", "y_from", "x_to", "y_to", "translation_m", "rotation_deg"});
   for (const RelationError& e : result.errors) {
     table.column("stamp_from").push_back(relations[e.relation_index].stamp_from);
     table.column("stamp_to").push_back(relations[e.relation_index].stamp_to);
@@ -83,7 +87,7 @@ ErrorTable relation_table(const RelationErrorResult& result, const std::vector<R
 }
 
 ErrorTable pose_table(const AteResult& ate, const Trajectory& estimate) {
-  ErrorTable table;
+  ErrorTable table({"stamp", "x", "y", "ate_m"});
   for (std::size_t i = 0; i < ate.errors.size(); ++i) {
     const StampedPose& pose = estimate[ate.estimate_indices[i]];
     const Eigen::Vector2d p = ate.T_reference_estimate * pose.pose.translation();
@@ -96,7 +100,7 @@ ErrorTable pose_table(const AteResult& ate, const Trajectory& estimate) {
 }
 
 ErrorTable window_table(const RpeResult& rpe) {
-  ErrorTable table;
+  ErrorTable table({"stamp_from", "stamp_to", "translation_m", "rotation_deg"});
   for (const RpeWindowError& e : rpe.errors) {
     table.column("stamp_from").push_back(e.stamp_from);
     table.column("stamp_to").push_back(e.stamp_to);
