@@ -214,6 +214,15 @@ TEST_F(CliTest, EvalWritesEachErrorItSummarises) {
   }
   EXPECT_NEAR(sum / static_cast<double>(relation_rows.size()), *json_number(evaluated.output, "trans_mean"), 1e-9);
 
+  // No relation with both stamps in the trajectory: the header alone, and a summary that says so.
+  write_text(out.file("elsewhere.relations"), "1000.1 1005.1 0 0 0 0 0 0\n");
+  const CommandResult none = run_command(slam2d("eval --json " + estimate_path + " --relations " +
+                                                out.file("elsewhere.relations") + " --errors-csv " + out.file("none.csv")));
+  ASSERT_EQ(none.exit_code, 0) << none.errors;
+  EXPECT_EQ(json_number(none.output, "relations"), 0.0);
+  EXPECT_TRUE(read_csv_rows(out.file("none.csv"), &header).empty());
+  EXPECT_EQ(header, "stamp_from,stamp_to,x_from,y_from,x_to,y_to,translation_m,rotation_deg");
+
   // A failed evaluation writes no errors file.
   const CommandResult failed = run_command(slam2d("eval " + estimate_path + " --reference " + out.file("absent.txt") +
                                                   " --errors-csv " + out.file("never.csv")));
