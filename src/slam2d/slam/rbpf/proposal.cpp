@@ -201,6 +201,10 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
   return result;
 }
 
+SE2 proposal_mean(const ProposalResult& proposal, const SE2& predicted) {
+  return proposal.matched ? from_local(proposal.x_star, proposal.mean) : predicted;
+}
+
 SE2 sample_pose(const ProposalResult& proposal, const MapPyramid& map, const std::vector<Eigen::Vector2d>& points_robot,
                 const SE2& predicted, const Eigen::Vector3d& sigmas, const RbpfProposalConfig& config, Rng& rng,
                 double& log_weight_factor) {

@@ -127,6 +127,10 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
                                  const SE2& predicted, const Eigen::Vector3d& sigmas, const RbpfProposalConfig& config,
                                  bool fit = true);
 
+/// The pose the proposal expects: its mean mu (x* (+) mu), or x' when the match was rejected
+/// (the motion model's mode). What sample_pose draws around, without the draw's noise.
+SE2 proposal_mean(const ProposalResult& proposal, const SE2& predicted);
+
 /// A pose drawn from the proposal: N(mu, Sigma) around x*, or the motion model around x' when
 /// the match was rejected. `log_weight_factor` receives the weight update (log eta, or the
 /// observation log likelihood at the drawn pose for the fallback).

@@ -121,7 +121,7 @@ bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
   particle.map.integrate_scan(scan, particle.T_map_robot);
   // The previous node may be shared with other particles (resampling copies paths); moving it into
   // the new node changes no reference count and frees nothing, so this is safe in parallel too.
-  particle.path = std::make_shared<RbpfPathNode>(particle.T_map_robot, stats_.updates, std::move(particle.path));
+  particle.path = std::make_shared<RbpfPathNode>(proposal_mean(proposal, predicted), stats_.updates, std::move(particle.path));
   return proposal.matched;
 }
 
@@ -252,7 +252,7 @@ RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
   scans_.push_back({scan.stamp, T_odom_robot, stats_.updates - 1});
   ++stats_.scans;
   const RbpfParticle& best_particle = best();
-  step.T_map_robot = best_particle.T_map_robot * update_odometry_.back().between(T_odom_robot);
+  step.T_map_robot = best_particle.path->T_map_robot * update_odometry_.back().between(T_odom_robot);
   step.neff = last_neff_;
   return step;
 }

@@ -124,9 +124,12 @@ void describe(Fields& f, RbpfConfig& c) {
 /// Throws Error for settings outside the documented ranges.
 void validate(const RbpfConfig& config);
 
-/// A node of a particle's path: the pose at one update, linked to the node of the previous one.
+/// A node of a particle's path: its estimate at one update, linked to the node of the previous one.
 /// Nodes are shared by the particles that descend from one particle (GMapping's trajectory tree).
 struct RbpfPathNode {
+  // The proposal's mean at that update (proposal_mean). The particle itself moved to a draw around
+  // it (and its map holds the scan there): the draw spreads the particles, the mean is the
+  // estimate without the draw's noise.
   SE2 T_map_robot;
   std::size_t update = 0;  // the update's number, from 0
   std::shared_ptr<RbpfPathNode> parent;
@@ -156,7 +159,7 @@ struct RbpfStats {
 struct RbpfWorkers;  // the TBB arena (rbpf_slam.cpp), kept out of this header
 
 struct RbpfStep {
-  SE2 T_map_robot;         // the best particle's pose at the last update composed with the odometry since
+  SE2 T_map_robot;         // the best particle's path node at the last update composed with the odometry since
   bool updated = false;    // this scan triggered an update
   bool resampled = false;
   double neff = 0.0;       // after this update (or the last one)
@@ -173,7 +176,8 @@ class RbpfSlam {
   /// The best particle (largest accumulated weight; the lowest index on ties).
   std::size_t best_index() const;
   const RbpfParticle& best() const { return particles_[best_index()]; }
-  /// The best particle's path, one pose per scan added: at each update its pose there; between
+  /// The best particle's path, one pose per scan added: at each update its path node (the
+  /// proposal's mean, not the drawn pose: measured in docs/methods/rbpf.md); between
   /// two updates the odometry motion since the first, carried forward from the first update's pose
   /// and backward from the second's and blended (pose_between_anchors), so the correction the
   /// second update made is shared by the scans before it; after the last update, carried forward.
