@@ -296,6 +296,7 @@ std::string run_json(const ReportRun& run) {
   out += ",\"map\":" + (run.map ? map_json(*run.map) : std::string("null"));
   out += ",\"trajectory\":{\"t\":" + numbers(run.stamps, 3) + ",\"x\":" + numbers(run.xs, 2) + ",\"y\":" +
          numbers(run.ys, 2) + ",\"theta\":" + numbers(run.thetas, 3) + "}";
+  out += ",\"overlay\":{\"x\":" + numbers(run.overlay_xs, 2) + ",\"y\":" + numbers(run.overlay_ys, 2) + "}";
   out += ",\"errors\":" + errors_json(run.errors);
   out += ",\"error_stats\":{\"mean\":" + rounded(run.error_mean, 4) + ",\"median\":" + rounded(run.error_median, 4) +
          ",\"max\":" + rounded(run.error_max, 4) + ",\"rmse\":" + rounded(run.error_rmse, 4) +
@@ -311,6 +312,32 @@ std::string replay_json(const ReplayScan& scan) {
          "," + array(scan.points_cm, [](int v) { return std::to_string(v); }) + "]";
 }
 
+Trajectory run_trajectory(const ReportRun& run) {
+  std::vector<StampedPose> poses;
+  for (std::size_t i = 0; i < run.stamps.size(); ++i) poses.push_back({run.stamps[i], SE2(run.xs[i], run.ys[i], run.thetas[i])});
+  return Trajectory(std::move(poses));
+}
+
+/// The run's positions moved onto the first run's frame by the rigid motion that best aligns the
+/// poses of equal stamps (runs of one log in different frames, e.g. odometry's); unmoved when
+/// fewer than two stamps match.
+void align_onto(ReportRun& run, const Trajectory& first, double tolerance) {
+  const StampIndex index(first);
+  std::vector<Eigen::Vector2d> source, target;
+  for (std::size_t i = 0; i < run.stamps.size(); ++i) {
+    if (const auto j = index.nearest(run.stamps[i], tolerance)) {
+      source.emplace_back(run.xs[i], run.ys[i]);
+      target.push_back(first[*j].pose.translation());
+    }
+  }
+  const SE2 T = source.size() >= 2 ? align_rigid_2d(source, target) : SE2();
+  for (std::size_t i = 0; i < run.stamps.size(); ++i) {
+    const Eigen::Vector2d p = T * Eigen::Vector2d(run.xs[i], run.ys[i]);
+    run.overlay_xs.push_back(p.x());
+    run.overlay_ys.push_back(p.y());
+  }
+}
+
 }  // namespace
 
 ReportData collect_report(const ReportInputs& inputs) {
@@ -320,14 +347,9 @@ ReportData collect_report(const ReportInputs& inputs) {
   if (!inputs.relations.empty()) truth.relations = read_relations(inputs.relations), data.error_kind = "relations";
   if (!inputs.reference.empty()) truth.reference = read_any_trajectory(inputs.reference), data.error_kind = "ate";
   for (const std::string& dir : inputs.run_dirs) data.runs.push_back(read_run(dir, truth, inputs.stamp_tolerance));
-  if (!inputs.log.empty()) {
-    const ReportRun& first = data.runs.front();
-    std::vector<StampedPose> poses;
-    for (std::size_t i = 0; i < first.stamps.size(); ++i) {
-      poses.push_back({first.stamps[i], SE2(first.xs[i], first.ys[i], first.thetas[i])});
-    }
-    data.replay = read_replay(inputs, Trajectory(std::move(poses)), data.log_scans);
-  }
+  const Trajectory first = run_trajectory(data.runs.front());
+  for (ReportRun& run : data.runs) align_onto(run, first, inputs.stamp_tolerance);
+  if (!inputs.log.empty()) data.replay = read_replay(inputs, first, data.log_scans);
   return data;
 }
 

@@ -41,6 +41,7 @@ struct ReportRun {
   std::optional<double> cpu_s, realtime_factor, peak_rss_mb;
   std::optional<ReportMap> map;
   std::vector<double> stamps, xs, ys, thetas;  // the trajectory
+  std::vector<double> overlay_xs, overlay_ys;  // its positions aligned onto the first run's frame
   std::vector<ReportError> errors;             // in time order
   std::vector<ReportSegment> loop_closures;    // graph SLAM: edges between non-consecutive vertices
   double error_mean = 0.0, error_median = 0.0, error_max = 0.0, error_rmse = 0.0;
