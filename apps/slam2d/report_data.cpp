@@ -52,23 +52,8 @@ std::string base64(std::span<const std::uint8_t> bytes) {
   return out;
 }
 
-/// The map cropped to its known cells (plus a margin), so the page shows what was mapped.
-OccupancyMap crop_to_known(const OccupancyMap& map, int margin) {
-  int x0 = map.width, y0 = map.height, x1 = -1, y1 = -1;
-  for (int y = 0; y < map.height; ++y) {
-    for (int x = 0; x < map.width; ++x) {
-      if (map.at(x, y) == OccupancyMap::kUnknown) continue;
-      x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y);
-    }
-  }
-  if (x1 < 0) return map;
-  x0 = std::max(0, x0 - margin), y0 = std::max(0, y0 - margin);
-  x1 = std::min(map.width - 1, x1 + margin), y1 = std::min(map.height - 1, y1 + margin);
-  return crop_map(map, x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-}
-
 ReportMap read_report_map(const std::string& yaml_path) {
-  const OccupancyMap map = crop_to_known(read_map(yaml_path), 10);
+  const OccupancyMap map = crop_to_content(read_map(yaml_path), 10);
   check(std::abs(map.origin.theta()) < 1e-9, yaml_path + ": a map with a rotated origin cannot be shown");
   ReportMap out;
   out.png_data_uri = "data:image/png;base64," + base64(encode_png(render_map(map, {})));
