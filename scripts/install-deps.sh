@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev libzstd-dev libsqlite3-dev
   clang libclang-rt-14-dev
   python3 python3-dev python3-pybind11 python3-numpy python3-pytest python3-yaml python3-distributed python3-matplotlib
+  chromium
 )
 
 missing=()

@@ -21,5 +21,6 @@ void add_perturb_command(CLI::App& app);
 void add_config_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
 void add_fuse_command(CLI::App& app);
+void add_report_command(CLI::App& app);
 
 }  // namespace slam2d::cli

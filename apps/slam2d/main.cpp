@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   slam2d::cli::add_config_command(app);
   slam2d::cli::add_convert_command(app);
   slam2d::cli::add_fuse_command(app);
+  slam2d::cli::add_report_command(app);
   slam2d::cli::install_interrupt_handler();
   try {
     app.parse(argc, argv);

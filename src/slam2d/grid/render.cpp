@@ -183,10 +183,10 @@ CellIndex cell_of(const OccupancyMap& map, const Eigen::Vector2d& point) {
           static_cast<int>(std::floor(std::clamp(local.y(), -1e9, 1e9)))};
 }
 
-/// The map cropped to its known cells and the paths' cells, widened by `margin` cells; the map
-/// itself when nothing is known and no path is given.
-OccupancyMap cropped(const OccupancyMap& map, const std::vector<SE2>& trajectory, const std::vector<SE2>& reference,
-                     int margin) {
+}  // namespace
+
+OccupancyMap crop_to_content(const OccupancyMap& map, int margin, const std::vector<SE2>& trajectory,
+                             const std::vector<SE2>& reference) {
   int x_min = map.width;
   int y_min = map.height;
   int x_max = -1;
@@ -215,6 +215,8 @@ OccupancyMap cropped(const OccupancyMap& map, const std::vector<SE2>& trajectory
   y_max = std::min(map.height - 1, y_max + margin);
   return crop_map(map, x_min, y_min, x_max - x_min + 1, y_max - y_min + 1);
 }
+
+namespace {
 
 std::vector<Eigen::Vector2d> pixels_of(const OccupancyMap& map, const std::vector<SE2>& poses, int scale,
                                        const char* name) {
@@ -271,7 +273,7 @@ RgbImage render_map(const OccupancyMap& full_map, const std::vector<SE2>& trajec
   check(std::isfinite(full_map.resolution) && full_map.resolution > 0.0 && full_map.origin.vector().allFinite(),
         "render_map: map resolution or origin invalid");
   const OccupancyMap map =
-      options.crop_margin >= 0 ? cropped(full_map, trajectory, options.reference, options.crop_margin) : full_map;
+      options.crop_margin >= 0 ? crop_to_content(full_map, options.crop_margin, trajectory, options.reference) : full_map;
   const long long pixels = static_cast<long long>(map.width) * map.height * options.scale * options.scale;
   check(pixels <= (1LL << 28), "render_map: the picture would exceed 2^28 pixels");
   RgbImage image(map.width * options.scale, map.height * options.scale);

@@ -56,6 +56,10 @@ Eigen::Vector2d map_point_to_pixel(const OccupancyMap& map, const Eigen::Vector2
 /// The cells [x0, x0 + width) x [y0, y0 + height) of a map as a map of their own (its origin moved
 /// to cell (x0, y0)); the box must lie within the map.
 OccupancyMap crop_map(const OccupancyMap& map, int x0, int y0, int width, int height);
+/// The map cropped to its known cells and the paths' cells, widened by `margin` cells; the map
+/// itself when nothing is known and no path is given.
+OccupancyMap crop_to_content(const OccupancyMap& map, int margin, const std::vector<SE2>& trajectory = {},
+                             const std::vector<SE2>& reference = {});
 
 /// The length (m) of the scale bar render_map draws on a picture `pixels` wide at `metres_per_pixel`.
 double scale_bar_length(int pixels, double metres_per_pixel);

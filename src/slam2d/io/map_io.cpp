@@ -264,7 +264,9 @@ GrayImage gray_from_raster(const PngRaster& raster) {
   return image;
 }
 
-void encode_png(const std::string& path, int width, int height, bool rgb, const std::vector<std::uint8_t>& samples) {
+/// The PNG file's bytes; `path` (or what the image is) heads the error messages.
+std::vector<std::uint8_t> encode_png_bytes(const std::string& path, int width, int height, bool rgb,
+                                           const std::vector<std::uint8_t>& samples) {
   const std::size_t channels = rgb ? 3 : 1;
   check(width > 0 && height > 0 && samples.size() == static_cast<std::size_t>(width) * height * channels,
         path + ": cannot write an empty image or one whose size does not match its pixels");
@@ -286,7 +288,11 @@ void encode_png(const std::string& path, int width, int height, bool rgb, const 
   png_image_free(&image);
   if (ok == 0) throw Error(path + ": cannot encode PNG: " + message);
   encoded.resize(size);
-  write_file_atomically(path, std::span<const std::uint8_t>(encoded));
+  return encoded;
+}
+
+void encode_png(const std::string& path, int width, int height, bool rgb, const std::vector<std::uint8_t>& samples) {
+  write_file_atomically(path, std::span<const std::uint8_t>(encode_png_bytes(path, width, height, rgb, samples)));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -576,5 +582,9 @@ void write_png(const std::string& path, const GrayImage& image) {
 }
 
 void write_png(const std::string& path, const RgbImage& image) { encode_png(path, image.width, image.height, true, image.rgb); }
+
+std::vector<std::uint8_t> encode_png(const RgbImage& image) {
+  return encode_png_bytes("image", image.width, image.height, true, image.rgb);
+}
 
 }  // namespace slam2d

@@ -54,5 +54,7 @@ void write_pgm(const std::string& path, const GrayImage& image);
 void write_png(const std::string& path, const GrayImage& image);
 void write_png(const std::string& path, const RgbImage& image);
 RgbImage read_png_rgb(const std::string& path);
+/// The bytes of a PNG file holding the image (for embedding, e.g. as a data URI).
+std::vector<std::uint8_t> encode_png(const RgbImage& image);
 
 }  // namespace slam2d
