@@ -17,6 +17,7 @@
 #include <variant>
 
 #include "json.hpp"
+#include "report_html.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/pose_graph_file.hpp"
@@ -24,6 +25,7 @@
 #include "slam2d/eval/relation_error.hpp"
 #include "slam2d/eval/statistics.hpp"
 #include "slam2d/grid/render.hpp"
+#include "slam2d/io/atomic_file.hpp"
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/io/relations.hpp"
@@ -303,7 +305,7 @@ Trajectory run_trajectory(const ReportRun& run) {
   return Trajectory(std::move(poses));
 }
 
-/// The run's positions moved onto the first run's frame by the rigid motion that best aligns the
+/// The run's positions moved onto the base run's frame by the rigid motion that best aligns the
 /// poses of equal stamps (runs of one log in different frames, e.g. odometry's); unmoved when
 /// fewer than two stamps match.
 void align_onto(ReportRun& run, const Trajectory& first, double tolerance) {
@@ -332,14 +334,20 @@ ReportData collect_report(const ReportInputs& inputs) {
   if (!inputs.relations.empty()) truth.relations = read_relations(inputs.relations), data.error_kind = "relations";
   if (!inputs.reference.empty()) truth.reference = read_any_trajectory(inputs.reference), data.error_kind = "ate";
   for (const std::string& dir : inputs.run_dirs) data.runs.push_back(read_run(dir, truth, inputs.stamp_tolerance));
-  const Trajectory first = run_trajectory(data.runs.front());
-  for (ReportRun& run : data.runs) align_onto(run, first, inputs.stamp_tolerance);
-  if (!inputs.log.empty()) data.replay = read_replay(inputs, first, data.log_scans);
+  if (!data.error_kind.empty()) {
+    const auto best = std::min_element(data.runs.begin(), data.runs.end(), [](const ReportRun& a, const ReportRun& b) {
+      return !a.errors.empty() && (b.errors.empty() || a.error_mean < b.error_mean);
+    });
+    data.base = static_cast<std::size_t>(best - data.runs.begin());
+  }
+  const Trajectory base = run_trajectory(data.runs[data.base]);
+  for (ReportRun& run : data.runs) align_onto(run, base, inputs.stamp_tolerance);
+  if (!inputs.log.empty()) data.replay = read_replay(inputs, base, data.log_scans);
   return data;
 }
 
 std::string report_json(const ReportData& data) {
-  std::string out = "{\"version\":1,\"error_kind\":" + json_string(data.error_kind);
+  std::string out = "{\"version\":1,\"error_kind\":" + json_string(data.error_kind) + ",\"base\":" + std::to_string(data.base);
   out += ",\"runs\":" + array(data.runs, run_json);
   out += ",\"replay\":{\"log_scans\":" + std::to_string(data.log_scans) + ",\"scans\":" + array(data.replay, replay_json) + "}";
   out += "}";
@@ -350,6 +358,20 @@ std::string report_json(const ReportData& data) {
     else safe += out[i];
   }
   return safe;
+}
+
+WrittenReport write_report(const ReportData& data, const std::string& out_dir) {
+  constexpr std::string_view kDataPlaceholder = "\"@REPORT_DATA@\"";
+  const std::string_view page = kReportHtml;
+  const std::size_t at = page.find(kDataPlaceholder);
+  check(at != std::string_view::npos, "report: the HTML template has no data placeholder");
+  std::string html(page.substr(0, at));
+  html += report_json(data);
+  html += page.substr(at + kDataPlaceholder.size());
+  fs::create_directories(out_dir);
+  const std::string path = (fs::path(out_dir) / "index.html").string();
+  write_file_atomically(path, html);
+  return {path, html.size()};
 }
 
 }  // namespace slam2d::cli

@@ -41,13 +41,13 @@ struct ReportRun {
   std::optional<double> cpu_s, realtime_factor, peak_rss_mb;
   std::optional<ReportMap> map;
   std::vector<double> stamps, xs, ys, thetas;  // the trajectory
-  std::vector<double> overlay_xs, overlay_ys;  // its positions aligned onto the first run's frame
+  std::vector<double> overlay_xs, overlay_ys;  // its positions aligned onto the base run's frame
   std::vector<ReportError> errors;             // in time order
   std::vector<ReportSegment> loop_closures;    // graph SLAM: edges between non-consecutive vertices
   double error_mean = 0.0, error_median = 0.0, error_max = 0.0, error_rmse = 0.0;
 };
 
-/// A scan of the replay: the robot pose (first run's trajectory) and the end points in the map frame.
+/// A scan of the replay: the robot pose (the base run's trajectory) and the end points in the map frame.
 struct ReplayScan {
   double stamp = 0.0;
   double x = 0.0, y = 0.0, theta = 0.0;
@@ -57,6 +57,9 @@ struct ReplayScan {
 struct ReportData {
   std::string error_kind;  // "relations" | "ate" | "" (no ground truth)
   std::vector<ReportRun> runs;
+  // The run all runs are drawn on and aligned onto, and whose poses place the replay's scans: the
+  // one with the smallest mean error when there is ground truth, else the first.
+  std::size_t base = 0;
   std::vector<ReplayScan> replay;
   std::size_t log_scans = 0;  // scans in the log (the replay holds a subset)
 };
@@ -77,5 +80,14 @@ ReportData collect_report(const ReportInputs& inputs);
 
 /// The blob, compact JSON; "</" is written "<\/" so that it can sit in a <script> element.
 std::string report_json(const ReportData& data);
+
+struct WrittenReport {
+  std::string path;  // OUT_DIR/index.html
+  std::size_t bytes = 0;
+};
+
+/// The page (the template report/report.html, embedded at build time as report_html.hpp, with the
+/// blob in place of its placeholder), written atomically to out_dir/index.html.
+WrittenReport write_report(const ReportData& data, const std::string& out_dir);
 
 }  // namespace slam2d::cli

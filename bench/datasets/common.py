@@ -26,6 +26,14 @@ def run_json(command, nice=False):
     return json.loads(run(command, nice))
 
 
+def write_report(slam2d, run_dirs, out, relations=None, log=None):
+    """slam2d report over the run folders (docs/report.md): the page's path."""
+    command = [slam2d, "report", *run_dirs, "--out", out, "--json"]
+    command += ["--relations", relations] if relations else []
+    command += ["--log", log] if log else []
+    return run_json(command)["path"]
+
+
 def read_trajectory(path):
     """A slam2d text trajectory as (t, x, y, theta) tuples; ValueError naming the line otherwise."""
     rows = []

@@ -7,7 +7,8 @@ For each log (and each mode: with and without odometry) this runs
     slam2d eval DIR/trajectory.txt --relations RELATIONS --json
 and prints one table (or, with --json, one JSON document) with the relation error (mean/std of
 the translational error in m, mean rotational error in deg), the CPU seconds of the mapping run
-and its real-time factor (log duration / CPU time).
+and its real-time factor (log duration / CPU time). Each log's runs also go into one HTML report
+(slam2d report, docs/report.md): OUT/report_LOG/index.html.
 
 Usage: bench/datasets/map_benchmark.py [--slam2d build/release/bin/slam2d] [--data /work/shared/data]
                                        [--method hector] [--logs intel aces fr079] [--modes odometry no-odometry]
@@ -19,7 +20,7 @@ import json
 import os
 import sys
 
-from common import run_json
+from common import run_json, write_report
 
 LOGS = {
     "intel": ("intel/intel.clf.gz", "intel/intel.relations"),
@@ -47,7 +48,7 @@ def run_one(args, log, mode):
         "rot_mean_deg": error["rot_mean_deg"], "relations": error["relations"],
         "cpu_s": summary["cpu_s"], "realtime_factor": summary["realtime_factor"],
         "scans": summary["scans"], "scan_matching_2009_m": SCAN_MATCHING_2009[log],
-        "map_command": " ".join(map_command), "eval_command": " ".join(eval_command),
+        "map_command": " ".join(map_command), "eval_command": " ".join(eval_command), "out": out_dir,
     }
 
 
@@ -63,6 +64,10 @@ def main():
     args = parser.parse_args()
 
     rows = [run_one(args, log, mode) for log in args.logs for mode in args.modes]
+    for log in args.logs:
+        page = write_report(args.slam2d, [r["out"] for r in rows if r["log"] == log], os.path.join(args.out, f"report_{log}"),
+                            os.path.join(args.data, LOGS[log][1]), os.path.join(args.data, LOGS[log][0]))
+        print(f"report: {page}", file=sys.stderr)
     if args.json:
         json.dump({"method": args.method, "results": rows}, sys.stdout, indent=2)
         print()

@@ -27,7 +27,9 @@ chains it also reports, as the issue asks:
     error is in the first row); an RPE against it measures agreement with it, not truth. So the
     same RPE is also given against a second, independent reference, the median RBPF run with
     wheel odometry (every scan).
-RBPF figures are the median over the seeds (its spread on ACES is wide, docs/bags.md).
+RBPF figures are the median over the seeds (its spread on ACES is wide, docs/bags.md). Each log's
+runs (the median seed of the seeded ones) also go into one HTML report (slam2d report,
+docs/report.md): OUT/LOG-report/index.html.
 
 Usage: bench/datasets/pipeline_benchmark.py [--slam2d build/release/bin/slam2d] [--data /work/shared/data]
                                             [--seeds 3] [--logs intel aces fr079] [--out /tmp/slam2d_pipeline] [--json]
@@ -40,7 +42,7 @@ import math
 import os
 import sys
 
-from common import run_json, read_trajectory
+from common import run_json, read_trajectory, write_report
 
 LOGS = ["intel", "aces", "fr079"]
 TOLERANCE = 0.001  # s, slam2d eval's default stamp tolerance
@@ -214,6 +216,9 @@ def main():
         for name in ("hector+graph", "hector+rbpf"):
             r[name]["chain"] = bench.chain(log, r[name], reference, second_reference)
         results[log] = r
+        page = write_report(args.slam2d, [run["out"] for run in r.values()], os.path.join(args.out, f"{log}-report"),
+                            os.path.join(args.data, log, f"{log}.relations"), os.path.join(args.data, log, f"{log}.clf.gz"))
+        print(f"report: {page}", file=sys.stderr, flush=True)
 
     rows = [("graph", "graph SLAM", "log"), ("rbpf", "RBPF (median)", "log"), ("hector", "Hector", "log"),
             ("hector_none", "Hector", "none"), ("graph_none", "graph SLAM", "none"),

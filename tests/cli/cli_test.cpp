@@ -242,6 +242,9 @@ TEST(CliDemo, ShowsGraphSlamBesideTheOdometry) {
     }
   }
   EXPECT_TRUE(std::filesystem::exists(out.path() / "demo.json"));
+  // The report of both runs (its content is tested in report_cli_test.cpp), and the demo says where.
+  EXPECT_TRUE(std::filesystem::exists(out.path() / "report" / "index.html"));
+  EXPECT_NE(demo.output.find("\"report\": \"" + (out.path() / "report" / "index.html").string()), std::string::npos) << demo.output;
   const Trajectory truth_poses = read_trajectory(out.file("truth.txt"));
   const double graph = absolute_trajectory_error(read_trajectory(out.file("graph/trajectory.txt")), truth_poses).rmse;
   const double odometry = absolute_trajectory_error(read_trajectory(out.file("odometry/trajectory.txt")), truth_poses).rmse;

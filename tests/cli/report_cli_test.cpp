@@ -142,6 +142,36 @@ TEST_F(ReportCli, ErrorsMatchSlam2dEvalsAte) {
       << "graph SLAM beats odometry";
 }
 
+// All runs are drawn on, and aligned onto, the run with the smallest mean error, wherever it is in
+// the list; without ground truth, the first run.
+TEST_F(ReportCli, DrawsEveryRunOnTheMostAccurateRunsMap) {
+  ASSERT_EQ(report_->exit_code, 0) << report_->errors;
+  const std::string runs = run_dir("odometry") + " " + run_dir("graph");
+  ASSERT_EQ(run_command(slam2d("report --quiet " + runs + " --reference " + sim_->truth() + " --out " + out_->file("swapped")))
+                .exit_code,
+            0);
+  const YAML::Node data = YAML::Load(element_text(read_text(out_->file("swapped") + "/index.html"), "script", "report-data"));
+  ASSERT_EQ(data["base"].as<std::size_t>(), 1u);
+  const YAML::Node graph = data["runs"][1];
+  const YAML::Node odometry = data["runs"][0];
+  EXPECT_LT(graph["error_stats"]["mean"].as<double>(), odometry["error_stats"]["mean"].as<double>());
+  // The base run aligned onto itself stays where it is; the odometry comes onto it (within its drift).
+  double base_offset = 0.0;
+  double odometry_offset = 0.0;
+  const std::size_t n = graph["trajectory"]["x"].size();
+  ASSERT_EQ(odometry["overlay"]["x"].size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double gx = graph["trajectory"]["x"][i].as<double>(), gy = graph["trajectory"]["y"][i].as<double>();
+    base_offset = std::max(base_offset, std::hypot(graph["overlay"]["x"][i].as<double>() - gx, graph["overlay"]["y"][i].as<double>() - gy));
+    odometry_offset += std::hypot(odometry["overlay"]["x"][i].as<double>() - gx, odometry["overlay"]["y"][i].as<double>() - gy) / n;
+  }
+  EXPECT_LT(base_offset, 0.011);  // positions rounded to cm
+  EXPECT_LT(odometry_offset, 1.0);
+  ASSERT_EQ(run_command(slam2d("report --quiet " + runs + " --out " + out_->file("no-truth"))).exit_code, 0);
+  const YAML::Node plain = YAML::Load(element_text(read_text(out_->file("no-truth") + "/index.html"), "script", "report-data"));
+  EXPECT_EQ(plain["base"].as<std::size_t>(), 0u);
+}
+
 TEST_F(ReportCli, ReplayScansLieOnTheFirstRunsMap) {
   ASSERT_EQ(report_->exit_code, 0) << report_->errors;
   const YAML::Node data = report_data();
