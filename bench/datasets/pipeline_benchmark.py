@@ -237,8 +237,8 @@ def main():
         print(f"| {label} | {odometry} | " + " | ".join(cells) + " |")
     print()
     print("| chain | log | sparse, its relations | fused, same relations | fused, all | sparse densified, all | "
-          "Hector, all | relations <= 1 s: fused / Hector (n) | fused - Hector, mean ± s.e. (mm) | 0.2 s RPE fused | 0.2 s RPE Hector | jumps smoothed |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "Hector, all | relations <= 1 s: fused / Hector (n) | fused - Hector, mean ± s.e. (mm) | 0.2 s RPE fused | 0.2 s RPE Hector | 0.2 s RPE against RBPF: fused / Hector | jumps smoothed |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in ("hector+graph", "hector+rbpf"):
         for log in args.logs:
             c = results[log][name]["chain"]
