@@ -177,8 +177,13 @@ void draw_scale_bar(RgbImage& image, double metres_per_pixel) {
 }
 
 /// The cell holding a map-frame point (may lie outside the map).
+/// A map-frame point in continuous cell coordinates (x right, y up, cell (0, 0) from 0 to 1).
+Eigen::Vector2d cell_coordinates(const OccupancyMap& map, const Eigen::Vector2d& point) {
+  return map.origin.inverse().act(point) / map.resolution;
+}
+
 CellIndex cell_of(const OccupancyMap& map, const Eigen::Vector2d& point) {
-  const Eigen::Vector2d local = map.origin.inverse().act(point) / map.resolution;
+  const Eigen::Vector2d local = cell_coordinates(map, point);
   return {static_cast<int>(std::floor(std::clamp(local.x(), -1e9, 1e9))),
           static_cast<int>(std::floor(std::clamp(local.y(), -1e9, 1e9)))};
 }
@@ -260,7 +265,7 @@ double scale_bar_length(int pixels, double metres_per_pixel) {
 }
 
 Eigen::Vector2d map_point_to_pixel(const OccupancyMap& map, const Eigen::Vector2d& point, int scale) {
-  const Eigen::Vector2d local = map.origin.inverse().act(point) / map.resolution;  // in cells
+  const Eigen::Vector2d local = cell_coordinates(map, point);
   return {local.x() * scale, (map.height - local.y()) * scale};
 }
 
