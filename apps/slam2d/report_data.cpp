@@ -175,21 +175,15 @@ ReportRun read_run(const std::string& dir, const GroundTruth& truth, double tole
   run.dir = dir;
   run.name = fs::path(dir).lexically_normal().filename().string();
   if (run.name.empty()) run.name = fs::path(dir).lexically_normal().parent_path().filename().string();
-  const Trajectory trajectory = read_any_trajectory((fs::path(dir) / "trajectory.txt").string());
-  for (const StampedPose& pose : trajectory) {
-    run.stamps.push_back(pose.stamp);
-    run.xs.push_back(pose.pose.x());
-    run.ys.push_back(pose.pose.y());
-    run.thetas.push_back(pose.pose.theta());
-  }
+  run.trajectory = read_any_trajectory((fs::path(dir) / "trajectory.txt").string());
   run.summary_json = "{}";
   read_summary((fs::path(dir) / "summary.json").string(), run);
   const fs::path map_yaml = fs::path(dir) / "map.yaml";
   if (fs::exists(map_yaml)) run.map = read_report_map(map_yaml.string());
   const fs::path graph = fs::path(dir) / "graph.g2o";
   if (fs::exists(graph)) run.loop_closures = loop_closures(read_pose_graph(graph.string()));
-  if (truth.relations) run.errors = relation_errors(trajectory, *truth.relations, tolerance);
-  if (truth.reference) run.errors = pose_errors(trajectory, *truth.reference, tolerance);
+  if (truth.relations) run.errors = relation_errors(run.trajectory, *truth.relations, tolerance);
+  if (truth.reference) run.errors = pose_errors(run.trajectory, *truth.reference, tolerance);
   summarise_errors(run);
   return run;
 }
@@ -281,8 +275,12 @@ std::string run_json(const ReportRun& run) {
   out += ",\"cpu_s\":" + optional_number(run.cpu_s, 3) + ",\"realtime_factor\":" + optional_number(run.realtime_factor, 3) +
          ",\"peak_rss_mb\":" + optional_number(run.peak_rss_mb, 1);
   out += ",\"map\":" + (run.map ? map_json(*run.map) : std::string("null"));
-  out += ",\"trajectory\":{\"t\":" + numbers(run.stamps, 3) + ",\"x\":" + numbers(run.xs, 2) + ",\"y\":" +
-         numbers(run.ys, 2) + ",\"theta\":" + numbers(run.thetas, 3) + "}";
+  std::vector<double> t, x, y, theta;
+  for (const StampedPose& pose : run.trajectory) {
+    t.push_back(pose.stamp), x.push_back(pose.pose.x()), y.push_back(pose.pose.y()), theta.push_back(pose.pose.theta());
+  }
+  out += ",\"trajectory\":{\"t\":" + numbers(t, 3) + ",\"x\":" + numbers(x, 2) + ",\"y\":" + numbers(y, 2) +
+         ",\"theta\":" + numbers(theta, 3) + "}";
   out += ",\"overlay\":{\"x\":" + numbers(run.overlay_xs, 2) + ",\"y\":" + numbers(run.overlay_ys, 2) + "}";
   out += ",\"errors\":" + errors_json(run.errors);
   out += ",\"error_stats\":{\"mean\":" + rounded(run.error_mean, 4) + ",\"median\":" + rounded(run.error_median, 4) +
@@ -299,27 +297,21 @@ std::string replay_json(const ReplayScan& scan) {
          "," + array(scan.points_cm, [](int v) { return std::to_string(v); }) + "]";
 }
 
-Trajectory run_trajectory(const ReportRun& run) {
-  std::vector<StampedPose> poses;
-  for (std::size_t i = 0; i < run.stamps.size(); ++i) poses.push_back({run.stamps[i], SE2(run.xs[i], run.ys[i], run.thetas[i])});
-  return Trajectory(std::move(poses));
-}
-
 /// The run's positions moved onto the base run's frame by the rigid motion that best aligns the
 /// poses of equal stamps (runs of one log in different frames, e.g. odometry's); unmoved when
 /// fewer than two stamps match.
 void align_onto(ReportRun& run, const Trajectory& first, double tolerance) {
   const StampIndex index(first);
   std::vector<Eigen::Vector2d> source, target;
-  for (std::size_t i = 0; i < run.stamps.size(); ++i) {
-    if (const auto j = index.nearest(run.stamps[i], tolerance)) {
-      source.emplace_back(run.xs[i], run.ys[i]);
+  for (const StampedPose& pose : run.trajectory) {
+    if (const auto j = index.nearest(pose.stamp, tolerance)) {
+      source.push_back(pose.pose.translation());
       target.push_back(first[*j].pose.translation());
     }
   }
   const SE2 T = source.size() >= 2 ? align_rigid_2d(source, target) : SE2();
-  for (std::size_t i = 0; i < run.stamps.size(); ++i) {
-    const Eigen::Vector2d p = T * Eigen::Vector2d(run.xs[i], run.ys[i]);
+  for (const StampedPose& pose : run.trajectory) {
+    const Eigen::Vector2d p = T * pose.pose.translation();
     run.overlay_xs.push_back(p.x());
     run.overlay_ys.push_back(p.y());
   }
@@ -340,7 +332,7 @@ ReportData collect_report(const ReportInputs& inputs) {
     });
     data.base = static_cast<std::size_t>(best - data.runs.begin());
   }
-  const Trajectory base = run_trajectory(data.runs[data.base]);
+  const Trajectory& base = data.runs[data.base].trajectory;
   for (ReportRun& run : data.runs) align_onto(run, base, inputs.stamp_tolerance);
   if (!inputs.log.empty()) data.replay = read_replay(inputs, base, data.log_scans);
   return data;

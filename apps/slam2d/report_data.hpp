@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "slam2d/core/trajectory.hpp"
 #include "slam2d/io/log_reader.hpp"
 
 namespace slam2d::cli {
@@ -40,7 +41,7 @@ struct ReportRun {
   std::string summary_json;   // summary.json re-encoded as JSON ("{}" when absent)
   std::optional<double> cpu_s, realtime_factor, peak_rss_mb;
   std::optional<ReportMap> map;
-  std::vector<double> stamps, xs, ys, thetas;  // the trajectory
+  Trajectory trajectory;
   std::vector<double> overlay_xs, overlay_ys;  // its positions aligned onto the base run's frame
   std::vector<ReportError> errors;             // in time order
   std::vector<ReportSegment> loop_closures;    // graph SLAM: edges between non-consecutive vertices

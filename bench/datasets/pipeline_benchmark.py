@@ -36,13 +36,14 @@ Usage: bench/datasets/pipeline_benchmark.py [--slam2d build/release/bin/slam2d] 
 """
 
 import argparse
+import bisect
 import csv
 import json
 import math
 import os
 import sys
 
-from common import run_json, read_trajectory, write_report
+from common import run_json, read_trajectory, write_atomic, write_report
 
 LOGS = ["intel", "aces", "fr079"]
 TOLERANCE = 0.001  # s, slam2d eval's default stamp tolerance
@@ -50,10 +51,7 @@ SHORT_SPAN = 1.0  # s: the short relations, the true local error (FR079 has none
 
 
 def write_trajectory(path, poses):
-    with open(path + ".tmp", "w") as f:
-        for t, x, y, theta in poses:
-            f.write(f"{t:.6f} {x:.6f} {y:.6f} {theta:.6f}\n")
-    os.replace(path + ".tmp", path)
+    write_atomic(path, "".join(f"{t:.6f} {x:.6f} {y:.6f} {theta:.6f}\n" for t, x, y, theta in poses))
 
 
 def densified(sparse, stamps):
@@ -75,37 +73,32 @@ def densified(sparse, stamps):
     return out
 
 
+def filter_relations(relations_path, out_path, keep):
+    """The relations file's lines for which keep(stamp_from, stamp_to) holds, written to out_path; how many."""
+    kept = []
+    with open(relations_path) as f:
+        for line in f:
+            fields = line.split()
+            if len(fields) >= 2 and keep(float(fields[0]), float(fields[1])):
+                kept.append(line)
+    write_atomic(out_path, "".join(kept))
+    return len(kept)
+
+
 def covered_relations(relations_path, trajectory, out_path):
     """The relations both of whose stamps the trajectory has a pose for (within TOLERANCE)."""
     stamps = sorted(p[0] for p in trajectory)
-    import bisect
 
     def has(t):
         i = bisect.bisect_left(stamps, t)
         return any(0 <= j < len(stamps) and abs(stamps[j] - t) <= TOLERANCE for j in (i - 1, i))
 
-    kept = 0
-    with open(relations_path) as f, open(out_path + ".tmp", "w") as out:
-        for line in f:
-            fields = line.split()
-            if len(fields) >= 2 and has(float(fields[0])) and has(float(fields[1])):
-                out.write(line)
-                kept += 1
-    os.replace(out_path + ".tmp", out_path)
-    return kept
+    return filter_relations(relations_path, out_path, lambda a, b: has(a) and has(b))
 
 
 def short_relations(relations_path, out_path, max_span=SHORT_SPAN):
     """The relations between two scans at most max_span s apart."""
-    kept = 0
-    with open(relations_path) as f, open(out_path + ".tmp", "w") as out:
-        for line in f:
-            fields = line.split()
-            if len(fields) >= 2 and abs(float(fields[1]) - float(fields[0])) <= max_span:
-                out.write(line)
-                kept += 1
-    os.replace(out_path + ".tmp", out_path)
-    return kept
+    return filter_relations(relations_path, out_path, lambda a, b: abs(b - a) <= max_span)
 
 
 def paired_difference(errors_a, errors_b):

@@ -176,12 +176,12 @@ void draw_scale_bar(RgbImage& image, double metres_per_pixel) {
   draw_text(image, label, left, bottom - 4 * thickness - 8 * size, size);
 }
 
-/// The cell holding a map-frame point (may lie outside the map).
 /// A map-frame point in continuous cell coordinates (x right, y up, cell (0, 0) from 0 to 1).
 Eigen::Vector2d cell_coordinates(const OccupancyMap& map, const Eigen::Vector2d& point) {
   return map.origin.inverse().act(point) / map.resolution;
 }
 
+/// The cell holding a map-frame point (may lie outside the map).
 CellIndex cell_of(const OccupancyMap& map, const Eigen::Vector2d& point) {
   const Eigen::Vector2d local = cell_coordinates(map, point);
   return {static_cast<int>(std::floor(std::clamp(local.x(), -1e9, 1e9))),
