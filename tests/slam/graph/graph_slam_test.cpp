@@ -5,12 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/eval/ate.hpp"
+#include "slam2d/sim/office_world.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "support/simulated_office.hpp"
@@ -153,6 +155,88 @@ TEST(GraphSlam, RejectsBadConfiguration) {
   config = {};
   config.tracking.max_range = -1.0;
   EXPECT_THROW(GraphSlam{config}, Error);
+}
+
+// Lifelong mapping: the office's corridor ring driven three times. With the keyframe budget on, the
+// laps after the first are registered against it and their keyframes drop their points: the
+// keyframes that keep data stop growing after the first lap while the graph keeps every node, and
+// the trajectory stays as good as with every keyframe kept.
+struct RingLaps {
+  GraphSlamStats stats;
+  std::size_t held_after_first_lap = 0;
+  std::size_t keyframes_after_first_lap = 0;
+  std::size_t held_at_end = 0;
+  double ate_rmse = 0.0;
+};
+
+std::size_t held_keyframes(const GraphSlam& slam) {
+  return static_cast<std::size_t>(std::count_if(slam.keyframes().begin(), slam.keyframes().end(),
+                                                [](const Keyframe& k) { return !k.released; }));
+}
+
+const SimulatedRun& ring_run() {
+  static const SimulatedRun run = [] {
+    World world = make_office_world();
+    world.route = {{4.0, 6.0}, {20.0, 6.0}, {20.0, 12.0}, {4.0, 12.0}};  // 44 m round
+    SimulationConfig config;
+    config.duration = 250.0;  // three laps at 0.6 m/s
+    config.seed = 3;
+    return simulate(config, world);
+  }();
+  return run;
+}
+
+RingLaps drive_ring(const GraphSlamConfig& config) {
+  const SimulatedRun& run = ring_run();
+  const std::vector<const LaserMessage*> lasers = laser_messages(run);
+  GraphSlam slam(config);
+  RingLaps laps;
+  double driven = 0.0;
+  for (std::size_t i = 0; i < lasers.size(); ++i) {
+    slam.add_scan(lasers[i]->scan, lasers[i]->odom_pose);
+    if (i > 0) driven += (run.truth[i].pose.translation() - run.truth[i - 1].pose.translation()).norm();
+    if (laps.keyframes_after_first_lap == 0 && driven >= 44.0) {
+      laps.keyframes_after_first_lap = slam.keyframes().size();
+      laps.held_after_first_lap = held_keyframes(slam);
+    }
+  }
+  slam.finish();
+  laps.stats = slam.stats();
+  laps.held_at_end = held_keyframes(slam);
+  laps.ate_rmse = absolute_trajectory_error(slam.trajectory(), run.truth).rmse;
+  return laps;
+}
+
+TEST(GraphSlamLifelong, KeyframesHoldingDataStopGrowingAfterTheFirstLap) {
+  const RingLaps all = drive_ring({});
+  GraphSlamConfig config;
+  config.keyframes.redundant_radius = 0.5;
+  config.keyframes.redundant_angle = 0.5;
+  const RingLaps lifelong = drive_ring(config);
+  EXPECT_EQ(all.stats.released_keyframes, 0u);
+  EXPECT_EQ(all.held_at_end, all.stats.keyframes);
+  EXPECT_GT(lifelong.stats.keyframes, 2.5 * lifelong.keyframes_after_first_lap);  // the graph keeps every node
+  EXPECT_EQ(lifelong.held_at_end + lifelong.stats.released_keyframes, lifelong.stats.keyframes);
+  // What still grows: the first keyframes of lap 2 (before its first closure goes in, delayed) and
+  // the last ones, which the loop closer may still need (199, 275 and 609 keyframes when written).
+  EXPECT_LT(lifelong.held_at_end, 1.5 * lifelong.held_after_first_lap)
+      << lifelong.held_after_first_lap << " after the first lap of " << lifelong.stats.keyframes;
+  EXPECT_GT(lifelong.stats.released_keyframes, 0.6 * (lifelong.stats.keyframes - lifelong.keyframes_after_first_lap));
+  EXPECT_LT(lifelong.ate_rmse, std::max(0.05, 1.2 * all.ate_rmse)) << "all kept: " << all.ate_rmse;
+}
+
+TEST(GraphSlamLifelong, RejectsOutOfRangeBudgets) {
+  GraphSlamConfig config;
+  config.keyframes.redundant_radius = -0.5;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.keyframes.redundant_angle = -0.1;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.keyframes.redundant_radius = 0.5;  // an angle of 0 would release nothing
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config.keyframes.redundant_angle = 0.5;
+  EXPECT_NO_THROW(GraphSlam{config});
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/slam/graph/graph_slam.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -83,6 +84,7 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
     T_tracker_keyframe_ = tracked.T_map_robot;
     step.keyframe = true;
     step.loop_closures = close_loops(keyframes_.size() - 1, false);
+    if (lifelong()) release_redundant();
   } else {
     const std::size_t keyframe = keyframes_.size() - 1;
     scans_.push_back({scan.stamp, keyframe, graph_.poses[keyframes_[keyframe].node].between(estimate)});
@@ -121,6 +123,8 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool ma
   scans_.push_back({scan.stamp, keyframes_.size(), SE2()});
   keyframes_.push_back(std::move(keyframe));
   keyframe_scans_.push_back(scan);
+  loop_anchors_.emplace_back();
+  witness_.push_back(false);
   ++stats_.keyframes;
 }
 
@@ -130,6 +134,7 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   bool loop_closed = false;
   for (const LoopClosure& closure : closures) {
     graph_.edges.push_back(closure.edge);
+    loop_anchors_[closure.keyframe].push_back(closure.anchor);
     if (closure.near()) {
       ++stats_.near_links;
       continue;
@@ -139,7 +144,91 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     loop_closed = true;
   }
   if (loop_closed) optimize();
+  if (lifelong()) {
+    for (const LoopClosure& closure : closures) recheck_near(closure.keyframe);
+  }
   return static_cast<int>(closures.size());
+}
+
+namespace {
+
+// The keyframes [begin, end) whose path distance lies in [from, to] (it grows with the index).
+std::pair<std::size_t, std::size_t> along_path(const std::vector<Keyframe>& keyframes, double from, double to) {
+  const auto first = std::lower_bound(keyframes.begin(), keyframes.end(), from,
+                                      [](const Keyframe& k, double distance) { return k.path_distance < distance; });
+  const auto last = std::upper_bound(first, keyframes.end(), to,
+                                     [](double distance, const Keyframe& k) { return distance < k.path_distance; });
+  return {static_cast<std::size_t>(first - keyframes.begin()), static_cast<std::size_t>(last - keyframes.begin())};
+}
+
+}  // namespace
+
+// Lifelong: each keyframe is checked once the loop closer is done with it: it searched the large
+// window or the interval skipped it (finish() searches only from later ones), and it lies farther
+// back than a large correction's confirmation reaches (confirm_before matches earlier keyframes'
+// points). A closure found later may still release it (recheck_near).
+void GraphSlam::release_redundant() {
+  const double now = keyframes_.back().path_distance;
+  const double confirm_reach = config_.loop_closure.large.confirm_max_distance;
+  while (release_checked_ < loop_closer_.first_unsearched() &&
+         now - keyframes_[release_checked_].path_distance > confirm_reach) {
+    try_release(release_checked_++);
+  }
+}
+
+// A closure from `keyframe`: the checked keyframes around it along the path may now be linked to
+// the place it closed on (delayed closures go in when the robot has left the chain).
+void GraphSlam::recheck_near(std::size_t keyframe) {
+  const double here = keyframes_[keyframe].path_distance;
+  const double reach = link_reach();
+  const auto [begin, end] = along_path(keyframes_, here - reach, here + reach);
+  for (std::size_t k = begin; k < std::min(end, release_checked_); ++k) try_release(k);
+}
+
+// The keyframe drops its points and scan when a loop edge of a keyframe near it along the path
+// links it to an older keyframe that keeps its own and is redundant with it. That one keeps its
+// data for good, so that releases do not chain away from the place.
+void GraphSlam::try_release(std::size_t keyframe) {
+  if (keyframes_[keyframe].released || witness_[keyframe]) return;
+  const double here = keyframes_[keyframe].path_distance;
+  const double reach = link_reach();
+  const auto [begin, end] = along_path(keyframes_, here - reach, here + reach);
+  for (std::size_t linked = begin; linked < end; ++linked) {
+    for (const std::size_t anchor : loop_anchors_[linked]) {
+      const std::optional<std::size_t> witness = linked_witness(keyframe, linked, anchor);
+      if (!witness) continue;
+      keyframes_[keyframe].released = true;
+      keyframes_[keyframe].cloud = {};
+      keyframe_scans_[keyframe] = {};
+      witness_[*witness] = true;
+      ++stats_.released_keyframes;
+      return;
+    }
+  }
+}
+
+// An older keyframe that keeps its data, redundant with `keyframe`, that the loop edge from
+// `anchor` to `linked` joins to it by a path (along the keyframe's visit, the edge, the anchor's
+// visit) of at most link_reach(): the graph holds the two together.
+std::optional<std::size_t> GraphSlam::linked_witness(std::size_t keyframe, std::size_t linked,
+                                                     std::size_t anchor) const {
+  const auto position = [&](std::size_t k) { return graph_.poses[keyframes_[k].node].translation(); };
+  const double budget = link_reach() -
+                        std::abs(keyframes_[linked].path_distance - keyframes_[keyframe].path_distance) -
+                        (position(linked) - position(anchor)).norm();
+  if (budget < 0.0) return std::nullopt;
+  const double there = keyframes_[anchor].path_distance;
+  const auto [begin, end] = along_path(keyframes_, there - budget, there + budget);
+  for (std::size_t k = begin; k < std::min(end, keyframe); ++k) {
+    if (!keyframes_[k].released && redundant(keyframe, k)) return k;
+  }
+  return std::nullopt;
+}
+
+bool GraphSlam::redundant(std::size_t keyframe, std::size_t older) const {
+  const SE2 apart = graph_.poses[keyframes_[older].node].between(graph_.poses[keyframes_[keyframe].node]);
+  return apart.translation().norm() <= config_.keyframes.redundant_radius &&
+         std::abs(apart.theta()) <= config_.keyframes.redundant_angle;
 }
 
 int GraphSlam::close_loops(std::size_t current, bool final) {
@@ -194,6 +283,7 @@ Trajectory GraphSlam::trajectory() const {
 OccupancyMap GraphSlam::map() const {
   OccupancyGrid grid(OccupancyGridConfig{.resolution = config_.map_resolution, .max_range = config_.max_range});
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    if (keyframes_[k].released) continue;  // its place is drawn by the keyframe that witnessed the release
     grid.integrate_scan(keyframe_scans_[k], graph_.poses[keyframes_[k].node]);
   }
   return grid.to_occupancy_map();

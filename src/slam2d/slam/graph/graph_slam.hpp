@@ -23,6 +23,13 @@
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
 //    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
+// 5. lifelong (keyframes.redundant_radius > 0): the data a run keeps is bounded by place, not by
+//    time (slam_toolbox's lifelong mode, Cartographer's trimmer, in their simplest form). A
+//    keyframe the loop closer is done with (searched or skipped by the search interval, and too far
+//    back for a confirmation to need it) drops its points and scan when an older keyframe that
+//    keeps its own lies within the radius and angle, and the graph links the two: a loop edge near
+//    both, so that the path through it (along the two visits and the edge) is at most
+//    2 x loop_closure.min_path_distance. It stays a node; the older keyframe keeps its data for good.
 // Every scan gets a pose: keyframes their optimised node, the scans between two keyframes their
 // tracked motion, bent to meet both optimised ends.
 
@@ -103,6 +110,7 @@ struct GraphSlamStats {
   std::size_t held_dropped = 0;         // delayed: closures dropped for a better one held to the same chain
   std::size_t optimizations = 0;
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
+  std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
   double optimization_seconds = 0.0;    // wall time of the back end
   double loop_seconds = 0.0;            // wall time of loop closing (searches and verification)
   double global_search_seconds = 0.0;   // wall time of the global searches (part of loop_seconds)
@@ -145,6 +153,15 @@ class GraphSlam {
   void add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched);
   int close_loops(std::size_t current, bool final);
   int add_closures(const std::vector<LoopClosure>& closures, bool final);
+  bool lifelong() const { return config_.keyframes.redundant_radius > 0.0; }
+  // How far along the graph a loop edge links a keyframe to an older one: twice the recent chain
+  // (delayed closure adds one edge per chain passed, 8-18 m apart on the simulated ring).
+  double link_reach() const { return 2.0 * config_.loop_closure.min_path_distance; }
+  void release_redundant();
+  void recheck_near(std::size_t keyframe);
+  void try_release(std::size_t keyframe);
+  std::optional<std::size_t> linked_witness(std::size_t keyframe, std::size_t linked, std::size_t anchor) const;
+  bool redundant(std::size_t keyframe, std::size_t older) const;
   void copy_loop_stats();
   void optimize();
   SE2 current_pose() const;
@@ -162,6 +179,11 @@ class GraphSlam {
   GraphSlamStats stats_;
   std::optional<HectorSlam> tracker_;  // made at the first scan, when it is known whether odometry comes
   SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
+  // Lifelong: per keyframe, the keyframes its loop edges start at; the keyframes that witnessed a
+  // release (they keep their data for good); the first keyframe not yet checked for release.
+  std::vector<std::vector<std::size_t>> loop_anchors_;
+  std::vector<bool> witness_;
+  std::size_t release_checked_ = 0;
 };
 
 }  // namespace slam2d

@@ -9,7 +9,11 @@
 
 namespace slam2d {
 
-void validate(const KeyframeConfig& config) { check_fields(config, "KeyframeConfig"); }
+void validate(const KeyframeConfig& config) {
+  check_fields(config, "KeyframeConfig");
+  check(config.redundant_radius == 0.0 || config.redundant_angle > 0.0,
+        "KeyframeConfig: redundant_angle must be > 0 when redundant_radius is");
+}
 
 KeyframeSelector::KeyframeSelector(const KeyframeConfig& config) : config_(config) { validate(config_); }
 

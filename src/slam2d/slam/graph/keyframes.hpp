@@ -21,6 +21,11 @@ struct KeyframeConfig {
   double min_distance = 0.2;
   double min_angle = 0.2;
   double min_time = 10.0;
+  // Lifelong mapping: a keyframe within redundant_radius and redundant_angle of an older keyframe
+  // that keeps its points, once the graph links the two (a loop edge near both), drops its points
+  // and scan and stays a node only. 0 keeps every keyframe's data (the default).
+  double redundant_radius = 0.0;
+  double redundant_angle = 0.0;
 };
 
 template <typename Fields>
@@ -28,6 +33,9 @@ void describe(Fields& f, KeyframeConfig& c) {
   f.number("min_distance", c.min_distance, "m", at_least(0), "a new keyframe once the robot moved this far ...");
   f.number("min_angle", c.min_angle, "rad", at_least(0), "... or turned this much ...");
   f.number("min_time", c.min_time, "s", at_least(0), "... or this long passed; 0 disables the time rule");
+  f.number("redundant_radius", c.redundant_radius, "m", at_least(0),
+           "lifelong: a keyframe this near an older one that keeps its points, and linked to it, drops its own; 0: off");
+  f.number("redundant_angle", c.redundant_angle, "rad", at_least(0), "... and turned at most this much from it");
 }
 
 /// A graph node's scan: its end points in the robot frame, with normals (from the scan order).
@@ -37,6 +45,7 @@ struct Keyframe {
   double stamp = 0.0;          // s
   PointCloud2 cloud;           // robot frame
   double path_distance = 0.0;  // m travelled from the first keyframe (estimate at creation)
+  bool released = false;       // lifelong: its points were dropped (a node only, no loop target)
 };
 
 /// Throws Error for negative or non-finite values.

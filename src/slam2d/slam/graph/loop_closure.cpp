@@ -122,6 +122,7 @@ std::vector<std::size_t> loop_candidates(const std::vector<Keyframe>& keyframes,
   std::vector<std::size_t> candidates;
   for (std::size_t k = 0; k < current; ++k) {
     if (path_here - keyframes[k].path_distance < min_path_distance) break;  // path distance grows with k
+    if (keyframes[k].released) continue;  // no points left to match against
     if ((node_pose(graph, keyframes[k]).translation() - center).norm() <= radius(k)) candidates.push_back(k);
   }
   return candidates;
