@@ -13,12 +13,32 @@ class CommandFailed(RuntimeError):
     """A command that exited non-zero; the message holds the command and the end of its stderr."""
 
 
+def failed(command, exit_code, stderr):
+    """The CommandFailed of a command: its words, its exit code and the end of its stderr."""
+    return CommandFailed(f"{' '.join(command)} failed (exit {exit_code}): {stderr.strip()[-2000:]}")
+
+
 def run(command, nice=False):
     """The command's stdout; CommandFailed when it exits non-zero."""
     result = subprocess.run((["nice"] if nice else []) + command, capture_output=True, text=True)
     if result.returncode != 0:
-        raise CommandFailed(f"{' '.join(command)} failed (exit {result.returncode}): {result.stderr.strip()[-2000:]}")
+        raise failed(command, result.returncode, result.stderr)
     return result.stdout
+
+
+def run_measured(command):
+    """(stdout, peak MB) of a command: it is reaped by wait4, which gives its own maximum RSS (the
+    figure of /usr/bin/time -f %M); CommandFailed when it exits non-zero."""
+    with tempfile.TemporaryFile() as err:
+        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=err)
+        out = child.stdout.read()
+        child.stdout.close()
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode != 0:
+            err.seek(0)
+            raise failed(command, child.returncode, err.read().decode(errors="replace"))
+    return out.decode(), usage.ru_maxrss / 1024.0
 
 
 def run_json(command, nice=False):

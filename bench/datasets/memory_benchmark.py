@@ -7,13 +7,13 @@ For each log and each pass count P in --passes (1 is the log itself):
     slam2d perturb LOG --out REPLAY --fault repeat:times=P,back=1 --quiet     (P > 1; --end-to-end: back=0)
     slam2d map REPLAY --method M --out DIR --quiet --json                      (M in --methods)
     slam2d localize REPLAY --map GRAPH_OF_ONE_PASS/map.yaml --method mcl|ekf --initial=0,0,0 --out T --quiet
-and the peak resident memory of each command (the child's own maximum RSS, from wait4). 'graph-lifelong'
-is graph SLAM with configs/graph-lifelong.yaml. Prints a markdown table: peak MB per pass count and
+and the peak resident memory of each command (the child's own maximum RSS, from wait4). 'graph-keep-all'
+is graph SLAM with configs/graph-keep-all.yaml (the lifelong keyframe budget off). Prints a markdown table: peak MB per pass count and
 the ratio of the last to one pass; for graph SLAM also its keyframes and those released. --json prints
 one JSON document instead.
 
 Usage: bench/datasets/memory_benchmark.py [--slam2d build/release/bin/slam2d] [--data $SLAM2D_DATA]
-           [--logs intel fr079] [--passes 1 10] [--methods odometry hector graph graph-lifelong rbpf
+           [--logs intel fr079] [--passes 1 10] [--methods odometry hector graph graph-keep-all rbpf
            hector+graph mcl ekf] [--end-to-end] [--out /tmp/slam2d_memory] [--json] [--quiet]
 A log is $SLAM2D_DATA/LOG/LOG.clf.gz (or .clf).
 Ten passes of Intel and FR079 with every method: about 45 minutes on one core (graph SLAM's ten
@@ -23,32 +23,15 @@ passes of Intel alone 13 minutes: its back end optimises the whole graph after e
 import argparse
 import json
 import os
-import subprocess
 import sys
-import tempfile
 
-from common import CommandFailed, run, write_atomic
+from common import CommandFailed, run, run_measured, write_atomic
 
 LOGS = ["intel", "fr079"]
-METHODS = ["odometry", "hector", "graph", "graph-lifelong", "rbpf", "hector+graph", "mcl", "ekf"]
+METHODS = ["odometry", "hector", "graph", "graph-keep-all", "rbpf", "hector+graph", "mcl", "ekf"]
 LOCALIZERS = {"mcl", "ekf"}
 HERE = os.path.dirname(os.path.abspath(__file__))
-LIFELONG = os.path.join(HERE, "..", "..", "configs", "graph-lifelong.yaml")
-
-
-def run_measured(command):
-    """(stdout, peak MB) of a command: it is reaped by wait4, which gives its own maximum RSS."""
-    with tempfile.TemporaryFile() as err:
-        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=err)
-        out = child.stdout.read()
-        _, status, usage = os.wait4(child.pid, 0)
-        child.returncode = os.waitstatus_to_exitcode(status)
-        child.stdout.close()
-        if child.returncode != 0:
-            err.seek(0)
-            message = err.read().decode(errors="replace").strip()[-2000:]
-            raise CommandFailed(f"{' '.join(command)} failed (exit {child.returncode}): {message}")
-    return out.decode(), usage.ru_maxrss / 1024.0
+KEEP_ALL = os.path.join(HERE, "..", "..", "configs", "graph-keep-all.yaml")
 
 
 def replay(args, log, passes):
@@ -77,27 +60,14 @@ def measure(args, log, passes, method):
                    "--out", out + ".txt", "--quiet"]
         _, peak = run_measured(command)
         return {"peak_mb": peak}
-    config = ["--method", "graph", "--config", LIFELONG] if method == "graph-lifelong" else ["--method", method]
+    config = ["--method", "graph", "--config", KEEP_ALL] if method == "graph-keep-all" else ["--method", method]
     stdout, peak = run_measured([args.slam2d, "map", source, *config, "--out", out, "--quiet", "--json"])
     summary = json.loads(stdout)
     result = {"peak_mb": peak}
-    for key in ("keyframes", "released_keyframes"):
-        value = find(summary, key)
-        if value is not None:
-            result[key] = value
+    for key in ("keyframes", "released_keyframes"):  # graph SLAM's, and hector+graph's (its sparse graph)
+        if key in summary:
+            result[key] = summary[key]
     return result
-
-
-def find(document, key):
-    """The first value under `key` anywhere in a JSON document, or None."""
-    if isinstance(document, dict):
-        if key in document:
-            return document[key]
-        for value in document.values():
-            found = find(value, key)
-            if found is not None:
-                return found
-    return None
 
 
 def table(results, passes):

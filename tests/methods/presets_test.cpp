@@ -45,7 +45,7 @@ const FieldRow* find_row(const std::vector<FieldRow>& rows, const std::string& p
 
 TEST(Presets, EveryFileInConfigsIsReadAndValid) {
   int matchers = 0;
-  std::set<std::string> methods;  // a method may have more than one preset (graph, graph-lifelong)
+  std::set<std::string> methods;  // a method may have more than one preset (graph, graph-keep-all)
   for (const auto& entry : std::filesystem::directory_iterator("configs")) {
     if (entry.path().extension() != ".yaml") continue;
     const std::string path = entry.path().string();

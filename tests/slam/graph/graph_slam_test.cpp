@@ -157,10 +157,10 @@ TEST(GraphSlam, RejectsBadConfiguration) {
   EXPECT_THROW(GraphSlam{config}, Error);
 }
 
-// Lifelong mapping: the office's corridor ring driven three times. With the keyframe budget on, the
-// laps after the first are registered against it and their keyframes drop their points: the
-// keyframes that keep data stop growing after the first lap while the graph keeps every node, and
-// the trajectory stays as good as with every keyframe kept.
+// Lifelong mapping: the office's corridor ring driven three times. With the keyframe budget on (the
+// default), the laps after the first are registered against it and their keyframes drop their
+// points: the keyframes that keep data stop growing after the first lap while the graph keeps every
+// node, and the trajectory stays as good as with every keyframe kept.
 struct RingLaps {
   GraphSlamStats stats;
   std::size_t held_after_first_lap = 0;
@@ -208,11 +208,10 @@ RingLaps drive_ring(const GraphSlamConfig& config) {
 }
 
 TEST(GraphSlamLifelong, KeyframesHoldingDataStopGrowingAfterTheFirstLap) {
-  const RingLaps all = drive_ring({});
-  GraphSlamConfig config;
-  config.keyframes.redundant_radius = 0.5;
-  config.keyframes.redundant_angle = 0.5;
-  const RingLaps lifelong = drive_ring(config);
+  GraphSlamConfig keep_all;
+  keep_all.keyframes.redundant_radius = 0.0;
+  const RingLaps all = drive_ring(keep_all);
+  const RingLaps lifelong = drive_ring({});  // the budget is on by default
   EXPECT_EQ(all.stats.released_keyframes, 0u);
   EXPECT_EQ(all.held_at_end, all.stats.keyframes);
   EXPECT_GT(lifelong.stats.keyframes, 2.5 * lifelong.keyframes_after_first_lap);  // the graph keeps every node
@@ -233,7 +232,8 @@ TEST(GraphSlamLifelong, RejectsOutOfRangeBudgets) {
   config.keyframes.redundant_angle = -0.1;
   EXPECT_THROW(GraphSlam{config}, Error);
   config = {};
-  config.keyframes.redundant_radius = 0.5;  // an angle of 0 would release nothing
+  config.keyframes.redundant_radius = 0.5;
+  config.keyframes.redundant_angle = 0.0;  // would release nothing
   EXPECT_THROW(GraphSlam{config}, Error);
   config.keyframes.redundant_angle = 0.5;
   EXPECT_NO_THROW(GraphSlam{config});

@@ -123,8 +123,6 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool ma
   scans_.push_back({scan.stamp, keyframes_.size(), SE2()});
   keyframes_.push_back(std::move(keyframe));
   keyframe_scans_.push_back(scan);
-  loop_anchors_.emplace_back();
-  witness_.push_back(false);
   ++stats_.keyframes;
 }
 
@@ -134,7 +132,7 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   bool loop_closed = false;
   for (const LoopClosure& closure : closures) {
     graph_.edges.push_back(closure.edge);
-    loop_anchors_[closure.keyframe].push_back(closure.anchor);
+    keyframes_[closure.keyframe].loop_anchors.push_back(closure.anchor);
     if (closure.near()) {
       ++stats_.near_links;
       continue;
@@ -189,18 +187,18 @@ void GraphSlam::recheck_near(std::size_t keyframe) {
 // links it to an older keyframe that keeps its own and is redundant with it. That one keeps its
 // data for good, so that releases do not chain away from the place.
 void GraphSlam::try_release(std::size_t keyframe) {
-  if (keyframes_[keyframe].released || witness_[keyframe]) return;
+  if (keyframes_[keyframe].released || keyframes_[keyframe].witness) return;
   const double here = keyframes_[keyframe].path_distance;
   const double reach = link_reach();
   const auto [begin, end] = along_path(keyframes_, here - reach, here + reach);
   for (std::size_t linked = begin; linked < end; ++linked) {
-    for (const std::size_t anchor : loop_anchors_[linked]) {
+    for (const std::size_t anchor : keyframes_[linked].loop_anchors) {
       const std::optional<std::size_t> witness = linked_witness(keyframe, linked, anchor);
       if (!witness) continue;
       keyframes_[keyframe].released = true;
       keyframes_[keyframe].cloud = {};
       keyframe_scans_[keyframe] = {};
-      witness_[*witness] = true;
+      keyframes_[*witness].witness = true;
       ++stats_.released_keyframes;
       return;
     }

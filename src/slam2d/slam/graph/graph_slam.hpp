@@ -23,7 +23,7 @@
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
 //    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
-// 5. lifelong (keyframes.redundant_radius > 0): the data a run keeps is bounded by place, not by
+// 5. lifelong (keyframes.redundant_radius > 0, the default): the data a run keeps is bounded by place, not by
 //    time (slam_toolbox's lifelong mode, Cartographer's trimmer, in their simplest form). A
 //    keyframe the loop closer is done with (searched or skipped by the search interval, and too far
 //    back for a confirmation to need it) drops its points and scan when an older keyframe that
@@ -179,11 +179,7 @@ class GraphSlam {
   GraphSlamStats stats_;
   std::optional<HectorSlam> tracker_;  // made at the first scan, when it is known whether odometry comes
   SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
-  // Lifelong: per keyframe, the keyframes its loop edges start at; the keyframes that witnessed a
-  // release (they keep their data for good); the first keyframe not yet checked for release.
-  std::vector<std::vector<std::size_t>> loop_anchors_;
-  std::vector<bool> witness_;
-  std::size_t release_checked_ = 0;
+  std::size_t release_checked_ = 0;  // lifelong: the first keyframe not yet checked for release
 };
 
 }  // namespace slam2d

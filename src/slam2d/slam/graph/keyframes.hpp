@@ -23,9 +23,10 @@ struct KeyframeConfig {
   double min_time = 10.0;
   // Lifelong mapping: a keyframe within redundant_radius and redundant_angle of an older keyframe
   // that keeps its points, once the graph links the two (a loop edge near both), drops its points
-  // and scan and stays a node only. 0 keeps every keyframe's data (the default).
-  double redundant_radius = 0.0;
-  double redundant_angle = 0.0;
+  // and scan and stays a node only. A radius of 0 keeps every keyframe's data (Karto). The default
+  // was chosen by leave-one-out on Intel, ACES and FR079 (docs/defaults.md).
+  double redundant_radius = 0.25;
+  double redundant_angle = 0.25;
 };
 
 template <typename Fields>
@@ -45,7 +46,10 @@ struct Keyframe {
   double stamp = 0.0;          // s
   PointCloud2 cloud;           // robot frame
   double path_distance = 0.0;  // m travelled from the first keyframe (estimate at creation)
-  bool released = false;       // lifelong: its points were dropped (a node only, no loop target)
+  // Lifelong (keyframes.redundant_radius > 0):
+  bool released = false;                  // its points were dropped (a node only, no loop target)
+  bool witness = false;                   // it witnessed a release: it keeps its data for good
+  std::vector<std::size_t> loop_anchors;  // the keyframes its loop edges start at
 };
 
 /// Throws Error for negative or non-finite values.
