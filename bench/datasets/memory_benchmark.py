@@ -7,17 +7,18 @@ For each log and each pass count P in --passes (1 is the log itself):
     slam2d perturb LOG --out REPLAY --fault repeat:times=P,back=1 --quiet     (P > 1; --end-to-end: back=0)
     slam2d map REPLAY --method M --out DIR --quiet --json                      (M in --methods)
     slam2d localize REPLAY --map GRAPH_OF_ONE_PASS/map.yaml --method mcl|ekf --initial=0,0,0 --out T --quiet
-and the peak resident memory of each command (the child's own maximum RSS, from wait4). 'graph-keep-all'
-is graph SLAM with configs/graph-keep-all.yaml (the lifelong keyframe budget off). Prints a markdown table: peak MB per pass count and
-the ratio of the last to one pass; for graph SLAM also its keyframes and those released. --json prints
-one JSON document instead.
+and the peak resident memory of each command (the child's own maximum RSS, from wait4).
+'graph-keep-all' is graph SLAM with configs/graph-keep-all.yaml (the lifelong keyframe budget off).
+Prints a markdown table: peak MB per pass count and the ratio of the last to one pass; for graph
+SLAM also its keyframes and those released. --json prints one JSON document instead.
 
 Usage: bench/datasets/memory_benchmark.py [--slam2d build/release/bin/slam2d] [--data $SLAM2D_DATA]
            [--logs intel fr079] [--passes 1 10] [--methods odometry hector graph graph-keep-all rbpf
            hector+graph mcl ekf] [--end-to-end] [--out /tmp/slam2d_memory] [--json] [--quiet]
 A log is $SLAM2D_DATA/LOG/LOG.clf.gz (or .clf).
-Ten passes of Intel and FR079 with every method: about 45 minutes on one core (graph SLAM's ten
-passes of Intel alone 13 minutes: its back end optimises the whole graph after every closure).
+Ten passes of Intel and FR079 with every method: about 50 minutes on one core (graph SLAM's ten
+passes of Intel alone 8 minutes, 13 with graph-keep-all: its back end optimises the whole graph
+after every closure).
 """
 
 import argparse

@@ -23,13 +23,14 @@
 // 4. back end: sparse pose adjustment after every loop closure and at the end
 //    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
 //    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
-// 5. lifelong (keyframes.redundant_radius > 0, the default): the data a run keeps is bounded by place, not by
-//    time (slam_toolbox's lifelong mode, Cartographer's trimmer, in their simplest form). A
-//    keyframe the loop closer is done with (searched or skipped by the search interval, and too far
-//    back for a confirmation to need it) drops its points and scan when an older keyframe that
-//    keeps its own lies within the radius and angle, and the graph links the two: a loop edge near
-//    both, so that the path through it (along the two visits and the edge) is at most
-//    2 x loop_closure.min_path_distance. It stays a node; the older keyframe keeps its data for good.
+// 5. lifelong (keyframes.redundant_radius > 0, the default): the data a run keeps is bounded by
+//    place, not by time (slam_toolbox's lifelong mode, Cartographer's trimmer, in their simplest
+//    form). A keyframe the loop closer is done with (searched or skipped by the search interval,
+//    and too far back for a confirmation to need it) drops its points and scan when an older
+//    keyframe that keeps its own lies within the radius and angle, and the graph links the two: a
+//    loop edge near both, so that the path through it (along the two visits and the edge) is at
+//    most 2 x loop_closure.min_path_distance. It stays a node; the older keyframe keeps its data for
+//    good.
 // Every scan gets a pose: keyframes their optimised node, the scans between two keyframes their
 // tracked motion, bent to meet both optimised ends.
 
