@@ -81,6 +81,28 @@ TEST(PerturbCli, GzipOutputAndGeometryReadBack) {
   EXPECT_NEAR(json_number(info.output, "fov_deg").value_or(0.0), 180.0, 1e-9);
 }
 
+TEST(PerturbCli, ScanRateOdomShiftAndGlassFromTheCommandLine) {
+  TempDir dir;
+  const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0
+  const std::string out = dir.file("slow.clf");
+  const CommandResult result = run_command(slam2d("perturb " + simulated.log() + " --out " + out +
+                                                  " --fault odom-shift:by=-0.3 --fault scan-rate:hz=2 --fault glass --json"));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  for (const char* spec : {"odom-shift:by=-0.3", "scan-rate:hz=2", "glass:sectors=2,width=30"}) {
+    EXPECT_NE(result.output.find("\"spec\": \"" + std::string(spec) + "\""), std::string::npos) << result.output;
+  }
+  EXPECT_EQ(json_number(result.output, "laser_lines_removed"), 320.0);  // 401 scans at 0, 0.1, ..., 40 s -> every 0.5 s
+  EXPECT_GT(json_number(result.output, "odometry_poses_shifted").value_or(0.0), 400.0);
+  const CommandResult info = run_command(slam2d("info --json " + out));
+  ASSERT_EQ(info.exit_code, 0) << info.errors;
+  EXPECT_EQ(json_number(info.output, "scans"), 81.0);
+  // A far return the scanner cannot give: its range is 30 m.
+  const CommandResult far = run_command(slam2d("perturb " + simulated.log() + " --out " + out + "2 --fault spurious-far:min=40,max=60 --quiet"));
+  EXPECT_EQ(far.exit_code, 1);
+  EXPECT_NE(far.errors.find("spurious-far: min=40 m is not below the maximum range 30 m"), std::string::npos) << far.errors;
+  EXPECT_FALSE(std::filesystem::exists(out + "2"));
+}
+
 TEST(PerturbCli, BadSpecsExitOneWithAReasonAndNoOutput) {
   TempDir dir;
   const test::SimulatedLog simulated(40, std::nullopt);  // the office: FLASER at 10 Hz, ODOM at 20 Hz, stamps from 0

@@ -99,7 +99,14 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
     EXPECT_EQ(spec.rfind(kind + ":", 0), 0u) << spec;
     EXPECT_EQ(fault_spec(parse_fault(spec)), spec);
   }
-  EXPECT_EQ(fault_kinds().size(), 18u);
+  EXPECT_EQ(fault_kinds().size(), 24u);
+  EXPECT_EQ(fault_spec(parse_fault("odom-shift")), "odom-shift:by=0.6");
+  EXPECT_EQ(fault_spec(parse_fault("odom-shift:by=-0.3")), "odom-shift:by=-0.3");
+  EXPECT_EQ(fault_spec(parse_fault("scan-rate")), "scan-rate:hz=1");
+  EXPECT_EQ(fault_spec(parse_fault("spurious-far:p=0.1")), "spurious-far:p=0.1,min=20,max=50");
+  EXPECT_EQ(fault_spec(parse_fault("mixed-pixels:alternate=6")), "mixed-pixels:p=0.5,jump=0.5,alternate=6");
+  EXPECT_EQ(fault_spec(parse_fault("glass")), "glass:sectors=2,width=30");
+  EXPECT_EQ(fault_spec(parse_fault("laser-noise:bearing=1")), "laser-noise:sigma=0.05,bearing=1");
   EXPECT_EQ(fault_spec(parse_fault("odom-noise")), "odom-noise:translation=0.05,heading=0.02,rotation=0.05");
   EXPECT_EQ(fault_spec(parse_fault("odom-reset:every=30")), "odom-reset:every=30,start=30");
 }
@@ -107,7 +114,15 @@ TEST(FaultSpec, DefaultsAndCanonicalSpecs) {
 TEST(FaultSpec, BadSpecsAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"wobble", "unknown fault kind 'wobble'"},
-      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, odom-reset, wheel-scale, heading-drift, odom-noise, scan-gap,"},
+      {"wobble:x", "unknown fault kind 'wobble' (kinds: stall, odom-gap, odom-reset, wheel-scale, heading-drift, odom-noise, odom-shift, scan-gap,"},
+      {"odom-shift:by=5.5", "by=5.5 is out of range [-5, 5]"},
+      {"scan-rate:hz=0", "hz=0 is out of range (0, 1000]"},
+      {"spurious-far:min=50,max=20", "min must be less than max"},
+      {"mixed-pixels:jump=0", "jump=0 is out of range (0, inf)"},
+      {"mixed-pixels:alternate=101", "alternate must be at most 100"},
+      {"glass:sectors=0", "sectors=0 must be >= 1"},
+      {"glass:width=400", "width=400 is out of range (0, 360]"},
+      {"laser-noise:bearing=-1", "bearing=-1 is out of range [0, 90]"},
       {"odom-noise:translation=-1", "translation=-1 is out of range [0, 10]"},
       {"odom-reset:every=0", "every=0 is out of range (0, inf)"},
       {"stall:every=60,lenght=2", "unknown key 'lenght' for stall (keys: every, start, duration)"},
@@ -439,7 +454,9 @@ TEST(FaultInjection, JitterDuplicateAndBackwardsChangeStampsAsStated) {
 TEST(FaultInjection, SameSeedSameLogOtherSeedOtherLog) {
   test::TempDir dir;
   const std::vector<Fault> faults = {parse_fault("stall:every=20"), parse_fault("jitter"), parse_fault("range-noise"),
-                                     parse_fault("spurious-short:p=0.02"), parse_fault("duplicate:p=0.05")};
+                                     parse_fault("spurious-short:p=0.02"), parse_fault("duplicate:p=0.05"),
+                                     parse_fault("spurious-far:p=0.02"), parse_fault("mixed-pixels"), parse_fault("glass"),
+                                     parse_fault("laser-noise")};
   const auto write = [&](std::uint64_t seed, const std::string& name) {
     Messages messages = office();
     apply_faults(faults, messages, seed);
@@ -683,6 +700,252 @@ TEST(FaultInjection, RepeatBackDrivesTheRouteBackWithoutATeleport) {
   }
   EXPECT_LT(largest_step, 0.5);
   EXPECT_THROW(parse_fault("repeat:times=2,back=2"), Error);
+}
+
+}  // namespace
+}  // namespace slam2d
+
+namespace slam2d {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Odometry out of step, scan rate, far returns, mixed pixels, glass, a noisy laser.
+
+// A robot whose odometry is linear in time, translation and (unwrapped) heading, so interpolating
+// between two samples gives the true pose: it turns through +-pi every 21 s.
+SE2 driven_pose(double t) { return SE2(0.5 * (t - 100.0), 0.1 * (t - 100.0), normalize_angle(3.0 + 0.3 * (t - 100.0))); }
+
+// 30 s of it: FLASER at 10 Hz from 100 s, ODOM at 20 Hz from 100.025 s, in stamp order.
+Messages driven_log() {
+  Messages messages;
+  for (int i = 0; i <= 600; ++i) {
+    const double t = 100.025 + 0.05 * i;
+    if (i % 2 == 0 && i < 600) {
+      LaserMessage laser;
+      laser.type = "FLASER";
+      laser.scan.stamp = 100.0 + 0.05 * i;
+      laser.scan.range_max = 80.0;
+      laser.scan.angle_increment = deg_to_rad(1.0);
+      laser.scan.angle_min = -0.5 * kPi;
+      laser.scan.ranges.assign(181, 5.0);
+      laser.odom_pose = laser.laser_pose = driven_pose(laser.scan.stamp);
+      messages.emplace_back(laser);
+    }
+    OdometryMessage odom;
+    odom.reading.stamp = t;
+    odom.reading.pose = driven_pose(t);
+    messages.emplace_back(odom);
+  }
+  return messages;
+}
+
+TEST(FaultInjection, OdomShiftPutsThePoseOfStampPlusByBesideEachLine) {
+  for (const double by : {0.63, -0.63, 4.9}) {
+    SCOPED_TRACE(by);
+    Messages messages = driven_log();
+    const FaultReport report = report_of("odom-shift:by=" + std::to_string(by), messages);
+    const auto lasers = of_type<LaserMessage>(messages);
+    const auto odoms = of_type<OdometryMessage>(messages);
+    ASSERT_EQ(lasers.size(), 300u);
+    // Each chain is held at its own ends.
+    const auto clamped = [&](double t, double first, double last) { return std::clamp(t + by, first, last); };
+    for (const LaserMessage& laser : lasers) {
+      const SE2 expected = driven_pose(clamped(laser.scan.stamp, 100.0, 129.9));
+      EXPECT_TRUE(laser.odom_pose.is_approx(expected, 1e-9)) << laser.scan.stamp << " " << laser.odom_pose << " " << expected;
+      EXPECT_EQ(laser.laser_pose, laser.odom_pose);  // the repeated triple follows
+    }
+    for (const OdometryMessage& odom : odoms) {
+      const SE2 expected = driven_pose(clamped(odom.reading.stamp, 100.025, 130.025));
+      EXPECT_TRUE(odom.reading.pose.is_approx(expected, 1e-9)) << odom.reading.stamp;
+    }
+    EXPECT_GT(change(report, "odometry_poses_shifted"), 850.0);
+    EXPECT_NEAR(change(report, "max_pose_change_m"), std::abs(by) * std::hypot(0.5, 0.1), 1e-9);
+  }
+}
+
+// A stamp written late (as Intel's are, up to 0.9 s) keeps its pose's place on the path: by = 0
+// changes nothing, and the shifted path does not turn back.
+TEST(FaultInjection, OdomShiftKeepsTheFileOrderPathWhenAStampIsLate) {
+  Messages late = driven_log();
+  std::size_t k = 0;
+  for (SensorMessage& message : late) {
+    if (auto* laser = std::get_if<LaserMessage>(&message); laser != nullptr && k++ == 100) laser->scan.stamp += 0.35;
+  }
+  Messages unshifted = late;
+  EXPECT_EQ(change(report_of("odom-shift:by=0", unshifted), "odometry_poses_shifted"), 0.0);
+  EXPECT_EQ(laser_odometry(unshifted), laser_odometry(late));
+  const std::vector<SE2> shifted = laser_odometry(perturbed("odom-shift:by=0.63", 1, late));
+  const auto lasers = of_type<LaserMessage>(late);
+  for (std::size_t i = 1; i < shifted.size(); ++i) {
+    EXPECT_GE(shifted[i].x(), shifted[i - 1].x()) << i;  // the robot drives forward throughout
+    // Exact wherever the late line is not one of the two samples around stamp + by (the late one,
+    // at 110 s, sits at the next line's stamp 110.1 s); itself, the pose at 110.1 + by.
+    const double time = i == 100 ? 110.1 + 0.63 : std::min(lasers[i].scan.stamp + 0.63, 129.9);
+    if (time <= 109.9 + 1e-9 || time >= 110.1 - 1e-9) {
+      EXPECT_TRUE(shifted[i].is_approx(driven_pose(time), 1e-9)) << i;
+    }
+  }
+}
+
+TEST(FaultInjection, ScanRateKeepsLinesAtLeastAPeriodApartAndDropsNoneItNeedNot) {
+  Messages jittered = office();
+  apply_faults({parse_fault("jitter:sigma=0.03")}, jittered, 4);  // irregular stamps, some stepping back
+  const auto before = of_type<LaserMessage>(jittered);
+  Messages messages = jittered;
+  const FaultReport report = report_of("scan-rate:hz=3", messages);
+  const auto after = of_type<LaserMessage>(messages);
+  ASSERT_GT(after.size(), 100u);
+  EXPECT_EQ(change(report, "laser_lines_removed"), static_cast<double>(before.size() - after.size()));
+  EXPECT_EQ(of_type<OdometryMessage>(messages).size(), of_type<OdometryMessage>(office()).size());
+  EXPECT_EQ(after.front().scan.stamp, before.front().scan.stamp);
+  std::size_t j = 0;  // after[j] is before[i]
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    if (j < after.size() && before[i].scan.stamp == after[j].scan.stamp) {
+      if (j > 0) {
+        EXPECT_GE(after[j].scan.stamp - after[j - 1].scan.stamp, 1.0 / 3.0 - 1e-6) << i;
+      }
+      ++j;
+    } else {  // dropped: within a period of the last kept line
+      ASSERT_GT(j, 0u);
+      EXPECT_LT(before[i].scan.stamp - after[j - 1].scan.stamp, 1.0 / 3.0 - 1e-6) << i;
+    }
+  }
+  EXPECT_EQ(j, after.size());
+  // A rate the log's own 10 Hz meets keeps every line, a stamp 0.1 s after the last included.
+  EXPECT_EQ(of_type<LaserMessage>(perturbed("scan-rate:hz=10")).size(), of_type<LaserMessage>(office()).size());
+}
+
+TEST(FaultInjection, SpuriousFarMakesFarReturnsBelowTheMaximumRange) {
+  const auto before = of_type<LaserMessage>(office());
+  const auto after = of_type<LaserMessage>(perturbed("spurious-far:p=0.1"));  // min 20, max 50 clamped to 30
+  std::size_t valid = 0, far = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const LaserScan& scan = before[i].scan;
+    ASSERT_EQ(scan.range_max, 30.0);
+    for (std::size_t k = 0; k < scan.size(); ++k) {
+      const double range = after[i].scan.ranges[k];
+      if (!scan.is_valid(k)) {
+        EXPECT_EQ(range, scan.ranges[k]);
+        continue;
+      }
+      ++valid;
+      if (range == scan.ranges[k]) continue;
+      ++far;
+      EXPECT_GE(range, 20.0);
+      EXPECT_LT(range, 30.0);  // a return, not a no-return
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(far) / static_cast<double>(valid), 0.1, 0.005);
+  EXPECT_THROW(perturbed("spurious-far:min=30,max=40"), Error);  // nothing below the 30 m scanner's range
+}
+
+// One scan: 10 beams at 2 m, a doorway of 10 beams at 6 m, 10 beams at 2 m.
+Messages doorway() {
+  Messages messages = driven_log();
+  messages.resize(1);
+  LaserScan& scan = std::get<LaserMessage>(messages.front()).scan;
+  scan.ranges.assign(30, 2.0);
+  std::fill(scan.ranges.begin() + 10, scan.ranges.begin() + 20, 6.0);
+  return messages;
+}
+
+TEST(FaultInjection, MixedPixelsFillTheEdgesAsStated) {
+  const std::vector<double> logged = std::get<LaserMessage>(doorway().front()).scan.ranges;
+  // A single mixed pixel on the far side of each edge: beams 10 and 19, between 2 and 6 m.
+  Messages single = doorway();
+  const FaultReport report = report_of("mixed-pixels:p=1", single);
+  const std::vector<double>& mixed = std::get<LaserMessage>(single.front()).scan.ranges;
+  for (std::size_t k = 0; k < mixed.size(); ++k) {
+    if (k == 10 || k == 19) {
+      EXPECT_GE(mixed[k], 2.0);
+      EXPECT_LT(mixed[k], 6.0);
+      EXPECT_NE(mixed[k], logged[k]);
+    } else {
+      EXPECT_EQ(mixed[k], logged[k]) << k;
+    }
+  }
+  EXPECT_EQ(change(report, "edges"), 2.0);
+  EXPECT_EQ(change(report, "readings_changed"), 2.0);
+  // Alternating stretches of 4 beams from each edge into the doorway: 2, 6, 2, 6 m.
+  Messages alternating = doorway();
+  apply_faults({parse_fault("mixed-pixels:p=1,alternate=4")}, alternating, 1);
+  std::vector<double> expected = logged;
+  for (const std::size_t k : {10u, 12u, 19u, 17u}) expected[k] = 2.0;
+  EXPECT_EQ(std::get<LaserMessage>(alternating.front()).scan.ranges, expected);
+  // An edge smaller than `jump` is no edge; p = 0 changes nothing.
+  EXPECT_EQ(std::get<LaserMessage>(perturbed("mixed-pixels:p=1,jump=4", 1, doorway()).front()).scan.ranges, logged);
+  EXPECT_EQ(change(report_of("mixed-pixels:p=0", alternating), "readings_changed"), 0.0);
+  // On the office, a fraction p of its edges.
+  Messages office_log = office();
+  const FaultReport some = report_of("mixed-pixels:p=0.3", office_log);
+  ASSERT_GT(change(some, "edges"), 1000.0);
+  EXPECT_NEAR(change(some, "edges_mixed") / change(some, "edges"), 0.3, 0.03);
+}
+
+TEST(FaultInjection, GlassMakesNoReturnsInSectorsFixedInTheWorld) {
+  Messages messages = office();
+  const FaultReport report = report_of("glass:sectors=3,width=40", messages);
+  std::vector<double> centres;
+  for (const std::string key : {"sector_1_deg", "sector_2_deg", "sector_3_deg"}) centres.push_back(deg_to_rad(change(report, key)));
+  const auto before = of_type<LaserMessage>(office());
+  const auto after = of_type<LaserMessage>(messages);
+  std::size_t glass = 0, readings = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const LaserScan& scan = before[i].scan;
+    for (std::size_t k = 0; k < scan.size(); ++k) {
+      const double bearing = before[i].odom_pose.theta() + scan.T_robot_sensor.theta() + scan.angle(k);
+      bool inside = false;
+      for (const double centre : centres) inside = inside || std::abs(angle_difference(bearing, centre)) <= deg_to_rad(20.0);
+      EXPECT_EQ(after[i].scan.ranges[k], inside ? scan.range_max : scan.ranges[k]) << i << " " << k;
+      glass += inside ? 1 : 0;
+      ++readings;
+    }
+  }
+  EXPECT_GT(glass, readings / 20);
+  EXPECT_EQ(laser_odometry(messages), laser_odometry(office()));
+  // The seed places the sectors.
+  Messages again = office(), other = office();
+  EXPECT_EQ(report_of("glass:sectors=3,width=40", again).changes, report.changes);
+  EXPECT_NE(report_of("glass:sectors=3,width=40", other, 2).changes, report.changes);
+}
+
+TEST(FaultInjection, LaserNoiseTurnsEachScanAndAddsRangeNoise) {
+  // Ranges linear in the beam index, so a scan turned by delta reads r_k + slope delta / increment.
+  Messages ramp = driven_log();
+  for (SensorMessage& message : ramp) {
+    if (auto* laser = std::get_if<LaserMessage>(&message)) {
+      for (std::size_t k = 0; k < laser->scan.size(); ++k) laser->scan.ranges[k] = 3.0 + 0.01 * static_cast<double>(k);
+    }
+  }
+  const auto before = of_type<LaserMessage>(ramp);
+  const auto turned = of_type<LaserMessage>(perturbed("laser-noise:sigma=0,bearing=0.5", 1, ramp));
+  double sum_squares = 0.0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const double increment = before[i].scan.angle_increment;
+    const double delta = (turned[i].scan.ranges[90] - before[i].scan.ranges[90]) / 0.01 * increment;
+    for (std::size_t k = 10; k < 171; ++k) {  // one turn for the whole scan
+      EXPECT_NEAR(turned[i].scan.ranges[k] - before[i].scan.ranges[k], 0.01 * delta / increment, 1e-9) << i << " " << k;
+    }
+    sum_squares += delta * delta;
+  }
+  EXPECT_NEAR(rad_to_deg(std::sqrt(sum_squares / static_cast<double>(before.size()))), 0.5, 0.075);  // 300 scans
+  // Without a turn, range noise as range-noise has it.
+  const auto plain = of_type<LaserMessage>(office());
+  const auto noisy = of_type<LaserMessage>(perturbed("laser-noise:sigma=0.05,bearing=0"));
+  double noise_squares = 0.0;
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    for (std::size_t k = 0; k < plain[i].scan.size(); ++k) {
+      if (!plain[i].scan.is_valid(k)) {
+        EXPECT_EQ(noisy[i].scan.ranges[k], plain[i].scan.ranges[k]);
+        continue;
+      }
+      noise_squares += std::pow(noisy[i].scan.ranges[k] - plain[i].scan.ranges[k], 2);
+      ++valid;
+    }
+  }
+  EXPECT_NEAR(std::sqrt(noise_squares / static_cast<double>(valid)), 0.05, 0.001);
+  EXPECT_EQ(change(report_of("laser-noise:sigma=0,bearing=0", ramp), "readings_changed"), 0.0);
 }
 
 }  // namespace

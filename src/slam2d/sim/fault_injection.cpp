@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <set>
 
@@ -126,6 +127,17 @@ FaultWindows parse_windows(SpecArguments& arguments) {
   return windows;
 }
 
+// p, min and max of a fault that makes spurious returns in a band of ranges.
+template <typename SpuriousFault>
+Fault parse_spurious(SpecArguments& arguments) {
+  SpuriousFault f;
+  f.p = arguments.number("p", f.p, kProbability);
+  f.min = arguments.number("min", f.min, {0.0, kInf});
+  f.max = arguments.number("max", f.max, kPositive);
+  if (!(f.min < f.max)) arguments.fail("min must be less than max");
+  return f;
+}
+
 using FaultParser = std::function<Fault(SpecArguments&)>;
 
 // Kind names and their parsers, in the order of docs/faults.md.
@@ -155,8 +167,10 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
          f.rotation = a.number("rotation", f.rotation, {0.0, 10.0});
          return f;
        }},
+      {"odom-shift", [](SpecArguments& a) -> Fault { return OdomShiftFault{a.number("by", OdomShiftFault{}.by, {-5.0, 5.0})}; }},
       {"scan-gap", [](SpecArguments& a) -> Fault { return ScanGapFault{parse_windows(a)}; }},
       {"decimate", [](SpecArguments& a) -> Fault { return DecimateFault{a.count("k", DecimateFault{}.k, 1)}; }},
+      {"scan-rate", [](SpecArguments& a) -> Fault { return ScanRateFault{a.number("hz", ScanRateFault{}.hz, {0.0, 1000.0, true})}; }},
       {"jitter", [](SpecArguments& a) -> Fault { return JitterFault{a.number("sigma", JitterFault{}.sigma, {0.0, 60.0})}; }},
       {"duplicate", [](SpecArguments& a) -> Fault { return DuplicateFault{a.number("p", DuplicateFault{}.p, kProbability)}; }},
       {"backwards", [](SpecArguments& a) -> Fault {
@@ -169,12 +183,27 @@ const std::vector<std::pair<std::string, FaultParser>>& fault_table() {
          return RangeNoiseFault{a.number("sigma", RangeNoiseFault{}.sigma, {0.0, 100.0})};
        }},
       {"spurious-max", [](SpecArguments& a) -> Fault { return SpuriousMaxFault{a.number("p", SpuriousMaxFault{}.p, kProbability)}; }},
-      {"spurious-short", [](SpecArguments& a) -> Fault {
-         SpuriousShortFault f;
+      {"spurious-short", parse_spurious<SpuriousShortFault>},
+      {"spurious-far", parse_spurious<SpuriousFarFault>},
+      {"mixed-pixels", [](SpecArguments& a) -> Fault {
+         MixedPixelsFault f;
          f.p = a.number("p", f.p, kProbability);
-         f.min = a.number("min", f.min, {0.0, kInf});
-         f.max = a.number("max", f.max, kPositive);
-         if (!(f.min < f.max)) a.fail("min must be less than max");
+         f.jump = a.number("jump", f.jump, kPositive);
+         f.alternate = a.count("alternate", f.alternate, 0);
+         if (f.alternate > 100) a.fail("alternate must be at most 100");
+         return f;
+       }},
+      {"glass", [](SpecArguments& a) -> Fault {
+         GlassFault f;
+         f.sectors = a.count("sectors", f.sectors, 1);
+         if (f.sectors > 100) a.fail("sectors must be at most 100");
+         f.width_deg = a.number("width", f.width_deg, {0.0, 360.0, true});
+         return f;
+       }},
+      {"laser-noise", [](SpecArguments& a) -> Fault {
+         LaserNoiseFault f;
+         f.sigma = a.number("sigma", f.sigma, {0.0, 100.0});
+         f.bearing_deg = a.number("bearing", f.bearing_deg, {0.0, 90.0});
          return f;
        }},
       {"beams", [](SpecArguments& a) -> Fault { return BeamsFault{a.count("k", BeamsFault{}.k, 1)}; }},
@@ -209,8 +238,10 @@ Parameters parameters(const HeadingDriftFault& f) { return {"heading-drift", {{"
 Parameters parameters(const OdomNoiseFault& f) {
   return {"odom-noise", {{"translation", f.translation}, {"heading", f.heading}, {"rotation", f.rotation}}};
 }
+Parameters parameters(const OdomShiftFault& f) { return {"odom-shift", {{"by", f.by}}}; }
 Parameters parameters(const ScanGapFault& f) { return {"scan-gap", window_parameters(f.windows)}; }
 Parameters parameters(const DecimateFault& f) { return {"decimate", {{"k", as_number(f.k)}}}; }
+Parameters parameters(const ScanRateFault& f) { return {"scan-rate", {{"hz", f.hz}}}; }
 Parameters parameters(const JitterFault& f) { return {"jitter", {{"sigma", f.sigma}}}; }
 Parameters parameters(const DuplicateFault& f) { return {"duplicate", {{"p", f.p}}}; }
 Parameters parameters(const BackwardsFault& f) { return {"backwards", {{"p", f.p}, {"by", f.by}}}; }
@@ -219,6 +250,14 @@ Parameters parameters(const SpuriousMaxFault& f) { return {"spurious-max", {{"p"
 Parameters parameters(const SpuriousShortFault& f) {
   return {"spurious-short", {{"p", f.p}, {"min", f.min}, {"max", f.max}}};
 }
+Parameters parameters(const SpuriousFarFault& f) {
+  return {"spurious-far", {{"p", f.p}, {"min", f.min}, {"max", f.max}}};
+}
+Parameters parameters(const MixedPixelsFault& f) {
+  return {"mixed-pixels", {{"p", f.p}, {"jump", f.jump}, {"alternate", as_number(f.alternate)}}};
+}
+Parameters parameters(const GlassFault& f) { return {"glass", {{"sectors", as_number(f.sectors)}, {"width", f.width_deg}}}; }
+Parameters parameters(const LaserNoiseFault& f) { return {"laser-noise", {{"sigma", f.sigma}, {"bearing", f.bearing_deg}}}; }
 Parameters parameters(const BeamsFault& f) { return {"beams", {{"k", as_number(f.k)}}}; }
 Parameters parameters(const FovFault& f) { return {"fov", {{"deg", f.deg}}}; }
 Parameters parameters(const RangeMaxFault& f) { return {"range-max", {{"max", f.max}}}; }
@@ -557,6 +596,62 @@ Changes apply(const OdomNoiseFault& fault, Messages& messages, Rng& rng) {
           {"laser_path_length_after_m", laser_path_length(messages)}};
 }
 
+// One odometry chain in file order, its stamps made non-decreasing by lowering each to the
+// smallest stamp at or after it. Intel now and then writes a stamp up to 0.9 s late and the
+// lines after it are on time again: lowered, that pose keeps its place on the path, where sorting
+// by stamp would put it among later poses and make the path zigzag.
+struct ChainSamples {
+  std::vector<std::size_t> message;  // index of each sample's message
+  std::vector<double> stamp;         // s, non-decreasing
+  std::vector<SE2> pose;
+
+  // The pose at `time`, walking from sample k forward or back to the two samples around it;
+  // linear in translation, shortest arc in heading; held at the chain's ends.
+  SE2 at(std::size_t k, double time) const {
+    std::size_t j = k;
+    if (time >= stamp[k]) {
+      while (j + 1 < stamp.size() && stamp[j + 1] < time) ++j;
+      if (j + 1 == stamp.size() || time <= stamp[j]) return pose[j];
+      return interpolate(pose[j], pose[j + 1], (time - stamp[j]) / (stamp[j + 1] - stamp[j]));
+    }
+    while (j > 0 && stamp[j - 1] > time) --j;
+    if (j == 0) return pose[0];
+    return interpolate(pose[j - 1], pose[j], (time - stamp[j - 1]) / (stamp[j] - stamp[j - 1]));
+  }
+};
+
+std::array<ChainSamples, 2> chain_samples(const Messages& messages) {
+  std::array<ChainSamples, 2> chains;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    const std::optional<Chain> chain = chain_of(messages[i]);
+    if (!chain) continue;
+    chains[*chain].message.push_back(i);
+    chains[*chain].stamp.push_back(stamp_of(messages[i]));
+    chains[*chain].pose.push_back(odometry_pose(messages[i]));
+  }
+  for (ChainSamples& chain : chains) {
+    for (std::size_t k = chain.stamp.size(); k-- > 1;) chain.stamp[k - 1] = std::min(chain.stamp[k - 1], chain.stamp[k]);
+  }
+  return chains;
+}
+
+Changes apply(const OdomShiftFault& fault, Messages& messages, Rng&) {
+  std::size_t shifted = 0;
+  double largest_m = 0.0;  // the laser chain's largest pose change
+  const std::array<ChainSamples, 2> chains = chain_samples(messages);
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    const ChainSamples& chain = chains[c];
+    for (std::size_t k = 0; k < chain.message.size(); ++k) {
+      const SE2 pose = chain.at(k, chain.stamp[k] + fault.by);
+      if (pose == chain.pose[k]) continue;
+      set_odometry_pose(messages[chain.message[k]], pose);
+      ++shifted;
+      if (c == kLaserChain) largest_m = std::max(largest_m, (pose.translation() - chain.pose[k].translation()).norm());
+    }
+  }
+  return {{"odometry_poses_shifted", static_cast<double>(shifted)}, {"max_pose_change_m", largest_m}};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Timing faults.
 
@@ -577,20 +672,38 @@ Changes apply(const ScanGapFault& fault, Messages& messages, Rng&) {
   return {{"gaps", static_cast<double>(windows.size())}, {"laser_lines_removed", static_cast<double>(removed)}};
 }
 
-Changes apply(const DecimateFault& fault, Messages& messages, Rng&) {
-  std::vector<bool> keep(messages.size(), true);
-  std::vector<std::pair<std::string, std::size_t>> seen;  // laser type -> lines so far
+// Removes the laser lines that keep(laser, state) refuses, each laser type with its own State
+// (State{} at its first line). Returns the change "laser_lines_removed".
+template <typename State, typename Keep>
+Changes thin_laser_lines(Messages& messages, Keep&& keep) {
+  std::vector<bool> kept(messages.size(), true);
+  std::vector<std::pair<std::string, State>> states;  // laser type -> its state
   std::size_t removed = 0;
   for (std::size_t i = 0; i < messages.size(); ++i) {
     const auto* laser = std::get_if<LaserMessage>(&messages[i]);
     if (laser == nullptr) continue;
-    auto it = std::find_if(seen.begin(), seen.end(), [&](const auto& s) { return s.first == laser->type; });
-    if (it == seen.end()) it = seen.insert(seen.end(), {laser->type, 0});
-    keep[i] = it->second++ % fault.k == 0;
-    removed += keep[i] ? 0 : 1;
+    auto it = std::find_if(states.begin(), states.end(), [&](const auto& s) { return s.first == laser->type; });
+    if (it == states.end()) it = states.insert(states.end(), {laser->type, State{}});
+    kept[i] = keep(*laser, it->second);
+    removed += kept[i] ? 0 : 1;
   }
-  remove_marked(messages, keep);
+  remove_marked(messages, kept);
   return {{"laser_lines_removed", static_cast<double>(removed)}};
+}
+
+Changes apply(const DecimateFault& fault, Messages& messages, Rng&) {
+  return thin_laser_lines<std::size_t>(messages, [&](const LaserMessage&, std::size_t& seen) { return seen++ % fault.k == 0; });
+}
+
+// A stamp that steps back (Intel) is within 1/hz of the last kept one, so it is dropped.
+Changes apply(const ScanRateFault& fault, Messages& messages, Rng&) {
+  constexpr double kSlack = 1e-6;  // s, below the microseconds stamps are written in: 0.3 - 0.2 < 0.1 in doubles
+  const double period = 1.0 / fault.hz;
+  return thin_laser_lines<std::optional<double>>(messages, [&](const LaserMessage& laser, std::optional<double>& last_kept) {
+    if (last_kept && laser.scan.stamp - *last_kept < period - kSlack) return false;
+    last_kept = laser.scan.stamp;
+    return true;
+  });
 }
 
 Changes apply(const JitterFault& fault, Messages& messages, Rng& rng) {
@@ -638,27 +751,37 @@ bool is_valid_reading(const LaserScan& scan, double range) {
   return std::isfinite(range) && range >= scan.range_min && range < scan.range_max;
 }
 
-// Calls change(scan, range) for every reading; it returns the new range. Counts the changes.
+// Calls change(laser, logged) for every laser line, `logged` its ranges before; counts the
+// readings it changed.
 template <typename Change>
-Changes change_readings(Messages& messages, Change&& change) {
+Changes change_scans(Messages& messages, Change&& change) {
   std::size_t changed = 0;
   std::size_t readings = 0;
   for_each_laser(messages, [&](LaserMessage& laser) {
-    for (double& range : laser.scan.ranges) {
-      const double new_range = change(laser.scan, range);
-      changed += new_range != range ? 1 : 0;
-      range = new_range;
-    }
-    readings += laser.scan.ranges.size();
+    const std::vector<double> logged = laser.scan.ranges;
+    change(laser, logged);
+    for (std::size_t k = 0; k < logged.size(); ++k) changed += laser.scan.ranges[k] != logged[k] ? 1 : 0;
+    readings += logged.size();
   });
   return {{"readings_changed", static_cast<double>(changed)}, {"readings", static_cast<double>(readings)}};
 }
 
-Changes apply(const RangeNoiseFault& fault, Messages& messages, Rng& rng) {
-  return change_readings(messages, [&](const LaserScan& scan, double range) {
-    if (!is_valid_reading(scan, range)) return range;
-    return std::max(0.0, range + rng.gaussian(0.0, fault.sigma));
+// Calls change(scan, range) for every reading; it returns the new range. Counts the changes.
+template <typename Change>
+Changes change_readings(Messages& messages, Change&& change) {
+  return change_scans(messages, [&](LaserMessage& laser, const std::vector<double>&) {
+    for (double& range : laser.scan.ranges) range = change(laser.scan, range);
   });
+}
+
+// A valid reading plus N(0, sigma^2), clamped at 0; a no-return stays one.
+double noisy_range(const LaserScan& scan, double range, double sigma, Rng& rng) {
+  if (!is_valid_reading(scan, range)) return range;
+  return std::max(0.0, range + rng.gaussian(0.0, sigma));
+}
+
+Changes apply(const RangeNoiseFault& fault, Messages& messages, Rng& rng) {
+  return change_readings(messages, [&](const LaserScan& scan, double range) { return noisy_range(scan, range, fault.sigma, rng); });
 }
 
 Changes apply(const SpuriousMaxFault& fault, Messages& messages, Rng& rng) {
@@ -672,6 +795,117 @@ Changes apply(const SpuriousShortFault& fault, Messages& messages, Rng& rng) {
   return change_readings(messages, [&](const LaserScan&, double range) {
     return rng.bernoulli(fault.p) ? rng.uniform(fault.min, fault.max) : range;
   });
+}
+
+// Where a laser line is, for messages: "FLASER (line 12)".
+std::string where(const LaserMessage& laser) { return laser.type + " (line " + std::to_string(laser.line) + ")"; }
+
+Changes apply(const SpuriousFarFault& fault, Messages& messages, Rng& rng) {
+  for_each_laser(messages, [&](LaserMessage& laser) {
+    if (!(fault.min < laser.scan.range_max)) {
+      throw Error("spurious-far: min=" + format_number(fault.min) + " m is not below the maximum range " +
+                  format_number(laser.scan.range_max) + " m of " + where(laser));
+    }
+  });
+  return change_readings(messages, [&](const LaserScan& scan, double range) {
+    if (!rng.bernoulli(fault.p)) return range;
+    const double far = rng.uniform(fault.min, std::min(fault.max, scan.range_max));  // drawn whatever the reading
+    // uniform(a, b) can round up to b: stay a return
+    return is_valid_reading(scan, range) ? std::min(far, std::nextafter(scan.range_max, 0.0)) : range;
+  });
+}
+
+// Mixed pixels. The edges are found on the logged readings, so one edge's changes do not make
+// or hide another's.
+Changes apply(const MixedPixelsFault& fault, Messages& messages, Rng& rng) {
+  std::size_t edges = 0;
+  std::size_t mixed = 0;
+  Changes changes = change_scans(messages, [&](LaserMessage& laser, const std::vector<double>& logged) {
+    const LaserScan& scan = laser.scan;
+    std::vector<double>& ranges = laser.scan.ranges;
+    const auto n = static_cast<std::ptrdiff_t>(logged.size());
+    for (std::ptrdiff_t k = 0; k + 1 < n; ++k) {
+      const double a = logged[k], b = logged[k + 1];
+      if (!is_valid_reading(scan, a) || !is_valid_reading(scan, b) || !(std::abs(a - b) > fault.jump)) continue;
+      ++edges;
+      if (!rng.bernoulli(fault.p)) continue;
+      ++mixed;
+      const double near = std::min(a, b);
+      const std::ptrdiff_t step = b > a ? 1 : -1;  // from the edge into the far side
+      const std::ptrdiff_t first = b > a ? k + 1 : k;
+      if (fault.alternate == 0) {
+        ranges[first] = rng.uniform(near, std::max(a, b));
+        continue;
+      }
+      for (std::ptrdiff_t j = 0; j < static_cast<std::ptrdiff_t>(fault.alternate); ++j) {
+        const std::ptrdiff_t beam = first + j * step;
+        if (beam < 0 || beam >= n || !is_valid_reading(scan, logged[beam]) || !(logged[beam] > near + fault.jump)) break;
+        if (j % 2 == 0) ranges[beam] = near;
+      }
+    }
+  });
+  changes.insert(changes.begin(), {{"edges", static_cast<double>(edges)}, {"edges_mixed", static_cast<double>(mixed)}});
+  return changes;
+}
+
+// Glass: a reading whose bearing in the odometry frame (heading + mounting + beam angle) lies in
+// a sector becomes a no-return. Sectors fixed on the scanner would be a narrower field of view
+// (fov); fixed in the world they sweep across the scans as the robot turns, as panes do.
+Changes apply(const GlassFault& fault, Messages& messages, Rng& rng) {
+  std::vector<double> centres(fault.sectors);  // rad, in the odometry frame
+  for (double& centre : centres) centre = rng.uniform(-std::numbers::pi, std::numbers::pi);
+  const double half = 0.5 * deg_to_rad(fault.width_deg);
+  Changes changes = change_scans(messages, [&](LaserMessage& laser, const std::vector<double>&) {
+    LaserScan& scan = laser.scan;
+    const double heading = (laser.has_poses ? laser.odom_pose.theta() : 0.0) + scan.T_robot_sensor.theta();
+    for (std::size_t k = 0; k < scan.size(); ++k) {
+      const double bearing = heading + scan.angle(k);
+      const bool behind_glass = std::any_of(centres.begin(), centres.end(), [&](double centre) {
+        return std::abs(angle_difference(bearing, centre)) <= half;
+      });
+      if (behind_glass) scan.ranges[k] = scan.range_max;
+    }
+  });
+  for (std::size_t s = 0; s < centres.size(); ++s) {
+    changes.emplace_back("sector_" + std::to_string(s + 1) + "_deg", rad_to_deg(centres[s]));
+  }
+  return changes;
+}
+
+// The range along the fractional beam index `position` of the logged ranges: linear between two
+// neighbouring valid readings on one surface, the nearer beam's across an edge or a no-return (no
+// point made up between two surfaces), the end beam's beyond the ends.
+double resampled_range(const LaserScan& scan, const std::vector<double>& logged, double position) {
+  const double edge = MixedPixelsFault{}.jump;  // m, the depth step that makes an edge
+  position = std::clamp(position, 0.0, static_cast<double>(logged.size() - 1));
+  const auto i = static_cast<std::size_t>(position);
+  if (i + 1 >= logged.size()) return logged.back();
+  const double f = position - static_cast<double>(i);
+  const double a = logged[i], b = logged[i + 1];
+  if (!is_valid_reading(scan, a) || !is_valid_reading(scan, b) || std::abs(a - b) > edge) return f < 0.5 ? a : b;
+  return a + f * (b - a);
+}
+
+// A noisy laser: each scan as a scanner turned by delta ~ N(0, bearing^2) measures it (beam k
+// reads the range along angle(k) + delta, so its points turn by -delta), then range noise.
+Changes apply(const LaserNoiseFault& fault, Messages& messages, Rng& rng) {
+  Rng turns = rng.split(0);
+  Rng noise = rng.split(1);
+  const double sigma_rad = deg_to_rad(fault.bearing_deg);
+  double largest = 0.0;  // rad
+  Changes changes = change_scans(messages, [&](LaserMessage& laser, const std::vector<double>& logged) {
+    LaserScan& scan = laser.scan;
+    const double delta = turns.gaussian(0.0, sigma_rad);
+    largest = std::max(largest, std::abs(delta));
+    if (delta != 0.0 && scan.size() > 1 && scan.angle_increment != 0.0) {
+      for (std::size_t k = 0; k < scan.size(); ++k) {
+        scan.ranges[k] = resampled_range(scan, logged, static_cast<double>(k) + delta / scan.angle_increment);
+      }
+    }
+    for (double& range : scan.ranges) range = noisy_range(scan, range, fault.sigma, noise);
+  });
+  changes.emplace_back("max_turn_deg", rad_to_deg(largest));
+  return changes;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -716,7 +950,7 @@ Changes apply(const FovFault& fault, Messages& messages, Rng&) {
     while (first < n && scan.angle(first) < -half - kTolerance) ++first;
     std::size_t end = first;
     while (end < n && scan.angle(end) <= half + kTolerance) ++end;
-    if (end == first) throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam of " + laser.type + " (line " + std::to_string(laser.line) + ")");
+    if (end == first) throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam of " + where(laser));
     if (first == 0 && end == n) return;
     keep_beams(scan, first, 1, end - first);
     removed += n - (end - first);
@@ -725,8 +959,8 @@ Changes apply(const FovFault& fault, Messages& messages, Rng&) {
     } else if (scan.angle_min < 0.0) {
       laser.field_of_view = -2.0 * scan.angle_min;
     } else {
-      throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam left of the axis of " + laser.type +
-                  " (line " + std::to_string(laser.line) + "); PARAM lines declare a first beam at -fov/2 < 0");
+      throw Error("fov: deg=" + format_number(fault.deg) + " keeps no beam left of the axis of " + where(laser) +
+                  "; PARAM lines declare a first beam at -fov/2 < 0");
     }
   });
   return {{"beams_removed", static_cast<double>(removed)}};
@@ -736,7 +970,7 @@ Changes apply(const RangeMaxFault& fault, Messages& messages, Rng&) {
   for_each_laser(messages, [&](LaserMessage& laser) {
     if (fault.max > laser.scan.range_max) {
       throw Error("range-max: max=" + format_number(fault.max) + " m is beyond the maximum range " +
-                  format_number(laser.scan.range_max) + " m of " + laser.type + " (line " + std::to_string(laser.line) + ")");
+                  format_number(laser.scan.range_max) + " m of " + where(laser));
     }
   });
   Changes changes = change_readings(messages, [&](const LaserScan&, double range) {

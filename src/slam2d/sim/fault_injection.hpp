@@ -85,6 +85,15 @@ struct OdomNoiseFault {
   double heading = 0.02;      // rad per sqrt(m) travelled: heading error from driving, in [0, 10]
   double rotation = 0.05;     // rad per sqrt(rad) turned: heading error from turning, in [0, 10]
 };
+/// Odometry and laser out of step (unsynchronised clocks): every odometry pose becomes its chain's
+/// pose at its own stamp + by, interpolated along the chain (linear in translation, shortest arc in
+/// heading) and held at the chain's ends. by > 0: the odometry runs ahead of the laser (the pose
+/// beside a scan is where the robot is `by` seconds later). The chain is taken in file order with
+/// each stamp lowered to the smallest one at or after it (Intel's late stamps), so a stamp that
+/// steps back does not make the path zigzag; tv and rv are kept.
+struct OdomShiftFault {
+  double by = 0.6;  // s, |by| <= 5
+};
 /// Scan dropouts: every laser line in each window is removed (odometry kept).
 struct ScanGapFault {
   FaultWindows windows;
@@ -92,6 +101,11 @@ struct ScanGapFault {
 /// Keeps laser lines 0, k, 2k, ... of each laser type.
 struct DecimateFault {
   std::size_t k = 2;  // >= 1
+};
+/// A slower scanner: a laser line is kept when at least 1/hz s passed since the last kept one of
+/// its laser type (1 us of slack for stamps written in microseconds); odometry kept.
+struct ScanRateFault {
+  double hz = 1.0;  // Hz, in (0, 1000]
 };
 /// Laser stamps get Gaussian noise.
 struct JitterFault {
@@ -120,6 +134,38 @@ struct SpuriousShortFault {
   double min = 0.05;  // m, >= 0
   double max = 0.5;   // m, > min
 };
+/// With probability p a valid reading becomes a far spurious return (a reflection off glass or a
+/// mirror), uniform in [min, min(max, the scan's maximum range)): never a no-return.
+struct SpuriousFarFault {
+  double p = 0.01;   // in [0, 1]
+  double min = 20.0;  // m, >= 0, below every scan's maximum range
+  double max = 50.0;  // m, > min
+};
+/// Mixed pixels at depth edges (a beam's footprint straddles a near and a far surface): for each
+/// pair of neighbouring valid readings whose ranges differ by more than `jump`, with probability p
+/// the beam on the far side of the edge gets a range uniform in [near, far), or, with
+/// `alternate` = n > 0, the n beams beyond the edge on the far side alternate: the 1st, 3rd, ...
+/// get the near range, the others keep theirs (the stretch ends at the next beam that is no longer
+/// behind the edge). Edges are found on the readings as logged.
+struct MixedPixelsFault {
+  double p = 0.5;           // probability per edge, in [0, 1]
+  double jump = 0.5;        // m, > 0: a range difference that makes an edge
+  std::size_t alternate = 0;  // beams in an alternating stretch, 0 (a single mixed pixel) to 100
+};
+/// Glass: `sectors` sectors of bearing fixed in the odometry frame, each `width` wide and centred
+/// at seeded random bearings, in which every reading becomes a no-return (the scan's maximum
+/// range): panes the laser passes through, on a fixed side of the building. A laser line without
+/// an odometry pose (a bag's) uses its sensor frame.
+struct GlassFault {
+  std::size_t sectors = 2;  // in [1, 100]
+  double width_deg = 30.0;  // deg, in (0, 360]
+};
+/// A noisy laser over good odometry: each scan turned by N(0, bearing^2) about the sensor (its
+/// ranges resampled at the turned bearings), then N(0, sigma^2) on every valid reading, clamped at 0.
+struct LaserNoiseFault {
+  double sigma = 0.05;       // m, in [0, 100]
+  double bearing_deg = 0.5;  // deg, in [0, 90]
+};
 /// Fewer beams: keeps beams 0, k, 2k, ... (same first beam and field of view, k times the resolution).
 struct BeamsFault {
   std::size_t k = 2;  // >= 1
@@ -141,9 +187,10 @@ struct RepeatFault {
   bool back = false;      // every other copy played backwards: the robot drives the route back to its start
 };
 
-using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, OdomNoiseFault, ScanGapFault,
-                           DecimateFault, JitterFault, DuplicateFault, BackwardsFault, RangeNoiseFault,
-                           SpuriousMaxFault, SpuriousShortFault, BeamsFault, FovFault, RangeMaxFault, RepeatFault>;
+using Fault = std::variant<StallFault, OdomGapFault, OdomResetFault, WheelScaleFault, HeadingDriftFault, OdomNoiseFault,
+                           OdomShiftFault, ScanGapFault, DecimateFault, ScanRateFault, JitterFault, DuplicateFault,
+                           BackwardsFault, RangeNoiseFault, SpuriousMaxFault, SpuriousShortFault, SpuriousFarFault,
+                           MixedPixelsFault, GlassFault, LaserNoiseFault, BeamsFault, FovFault, RangeMaxFault, RepeatFault>;
 
 /// What one fault changed: its canonical spec and named counts or sizes (e.g. {"stalls", 22}).
 struct FaultReport {
@@ -163,7 +210,8 @@ Fault parse_fault(std::string_view spec);
 std::string fault_spec(const Fault& fault);
 
 /// Applies one fault to the messages (file order), drawing from `rng`. Throws Error when the
-/// fault cannot apply to a scan (fov keeping no beam, range-max beyond the scan's maximum range).
+/// fault cannot apply to a scan (fov keeping no beam, range-max beyond the scan's maximum range,
+/// spurious-far's min not below it).
 FaultReport apply_fault(const Fault& fault, std::vector<SensorMessage>& messages, Rng& rng);
 
 /// Applies the faults in order, fault i with Rng(seed).split(i).
