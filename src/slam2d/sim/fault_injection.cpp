@@ -605,18 +605,22 @@ struct ChainSamples {
   std::vector<double> stamp;         // s, non-decreasing
   std::vector<SE2> pose;
 
-  // The pose at `time`, walking from sample k forward or back to the two samples around it;
-  // linear in translation, shortest arc in heading; held at the chain's ends.
+  // The pose at `time`, seen from sample k: between the two samples around `time` on k's side
+  // (so time = stamp[k] gives pose[k], whatever samples share its stamp), linear in translation,
+  // shortest arc in heading; held at the chain's ends.
   SE2 at(std::size_t k, double time) const {
-    std::size_t j = k;
+    const auto begin = stamp.begin();
+    std::size_t after;  // the first sample at or after `time` (later than it, looking back)
     if (time >= stamp[k]) {
-      while (j + 1 < stamp.size() && stamp[j + 1] < time) ++j;
-      if (j + 1 == stamp.size() || time <= stamp[j]) return pose[j];
-      return interpolate(pose[j], pose[j + 1], (time - stamp[j]) / (stamp[j + 1] - stamp[j]));
+      after = static_cast<std::size_t>(std::lower_bound(begin + static_cast<std::ptrdiff_t>(k), stamp.end(), time) - begin);
+      if (after == k) return pose[k];
+    } else {
+      after = static_cast<std::size_t>(std::upper_bound(begin, begin + static_cast<std::ptrdiff_t>(k), time) - begin);
     }
-    while (j > 0 && stamp[j - 1] > time) --j;
-    if (j == 0) return pose[0];
-    return interpolate(pose[j - 1], pose[j], (time - stamp[j - 1]) / (stamp[j] - stamp[j - 1]));
+    if (after == stamp.size()) return pose.back();
+    if (after == 0) return pose.front();
+    const std::size_t before = after - 1;
+    return interpolate(pose[before], pose[after], (time - stamp[before]) / (stamp[after] - stamp[before]));
   }
 };
 
