@@ -11,10 +11,13 @@ corrected log: LOCALIZATION below):
     slam2d eval TRAJ --relations RELATIONS --json
 and the same method on the clean log; prints a markdown table of the mean translational relation
 error (m) of the perturbed run and its ratio to the clean run (or, with --json, one JSON document).
-The last column is the relations scored in the perturbed / the clean run: decimate and scan-gap
-remove scans, so some relations have no pose; then the clean error is the clean run's over the
-same relations (its poses at the scans the perturbed run kept), so the ratio compares like with like. Faults that move stamps (jitter, backwards) are
-scored at the original stamps: the method sees the moved ones, then its trajectory's scan i gets
+Beside each method, the column 'odometry (m)' is the same error of the perturbed log's odometry
+alone (`slam2d map LOG2 --method odometry`: its odometry poses as the trajectory), the error a
+method starts from. The last column is the relations scored in the perturbed / the clean run:
+decimate, scan-rate and scan-gap remove scans, so some relations have no pose; then the clean
+error is the clean run's over the same relations (its poses at the scans the perturbed run kept),
+so the ratio compares like with like. Faults that move stamps (jitter, backwards) are scored at
+the original stamps: the method sees the moved ones, then its trajectory's scan i gets
 the original scan i's stamp back before `slam2d eval`.
 
 Corrected logs (--corrected): the eight SLAM-corrected logs of $SLAM2D_DATA/carmen-corrected,
@@ -37,8 +40,8 @@ Usage: bench/datasets/robustness_benchmark.py [--slam2d build/release/bin/slam2d
 --quick: aces only, the severe severity, faults stall, wheel-scale, decimate, range-max and
 spurious-short, methods hector and pl-icp (with --corrected: edmonton and seattle); an explicit
 --logs/--faults/--severities/--methods wins over the --quick choice. --resume reuses the results
-already in --out. The full public run is 3 logs x 15 faults x 2 severities x 4 methods (360
-method runs, hours on 2 cores).
+already in --out. The full public run is 3 logs x 22 faults x 2 severities x 6 methods (the MCL
+rows on intel and fr079 only) and one odometry run per log, fault and severity: hours on 2 cores.
 """
 
 import argparse
@@ -64,14 +67,21 @@ FAULTS = {
     "odom-reset": ("odom-reset:every=120", "odom-reset:every=30"),
     "wheel-scale": ("wheel-scale:translation=1.02", "wheel-scale:translation=1.05,rotation=1.02"),
     "heading-drift": ("heading-drift:rate=0.5", "heading-drift:rate=2"),
+    "odom-shift": ("odom-shift:by=0.3", "odom-shift:by=0.6"),          # the odometry runs ahead
+    "odom-shift-lag": ("odom-shift:by=-0.3", "odom-shift:by=-0.6"),    # the odometry lags
     "scan-gap": ("scan-gap:every=60,duration=1.2", "scan-gap:every=60,duration=3"),
     "decimate": ("decimate:k=2", "decimate:k=4"),
+    "scan-rate": ("scan-rate:hz=2", "scan-rate:hz=1"),
     "jitter": ("jitter:sigma=0.01", "jitter:sigma=0.05"),
     "duplicate": ("duplicate:p=0.01", "duplicate:p=0.05"),
     "backwards": ("backwards:p=0.01,by=0.5", "backwards:p=0.05,by=0.5"),
     "range-noise": ("range-noise:sigma=0.03", "range-noise:sigma=0.1"),
     "spurious-max": ("spurious-max:p=0.01", "spurious-max:p=0.05"),
     "spurious-short": ("spurious-short:p=0.01", "spurious-short:p=0.05"),
+    "spurious-far": ("spurious-far:p=0.02", "spurious-far:p=0.1"),
+    "mixed-pixels": ("mixed-pixels:p=0.5", "mixed-pixels:p=1,alternate=6"),
+    "glass": ("glass:sectors=1,width=30", "glass:sectors=3,width=45"),
+    "laser-noise": ("laser-noise:sigma=0.03,bearing=0.25", "laser-noise:sigma=0.1,bearing=1"),
     "beams": ("beams:k=2", "beams:k=4"),
     "fov": ("fov:deg=120", "fov:deg=90"),
     "range-max": ("range-max:max=30", "range-max:max=5.6"),
@@ -232,10 +242,13 @@ def public_benchmark(args):
         return os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
 
     runs = [(log, "clean", "-", method) for log in args.logs for method in args.methods]
-    runs += [(log, fault, severity, method) for (log, fault, severity) in cases for method in args.methods]
+    runs += [(log, fault, severity, method) for (log, fault, severity) in cases for method in args.methods + ["odometry"]]
     results = dict(zip(runs, parallel(args, run, runs)))
     rows = []
     for (log, fault, severity, method), result in results.items():
+        if method == "odometry":
+            continue
+        odometry = results.get((log, fault, severity, "odometry"), {}).get("error")  # none for the clean rows
         clean = results[log, "clean", "-", method]["error"]
         if clean and result["error"] and result["error"]["relations"] != clean["relations"]:
             clean = clean_on_same_scans(args, run_dir(log, "clean", "-", method), run_dir(log, fault, severity, method),
@@ -245,6 +258,7 @@ def public_benchmark(args):
         rows.append({"log": log, "fault": fault, "severity": severity,
                      "spec": spec_of.get((fault, severity), ""), "method": method,
                      "trans_mean_m": value, "clean_trans_mean_m": clean_value, "ratio": ratio(value, clean_value),
+                     "odometry_trans_mean_m": odometry["trans_mean"] if odometry else None,
                      "rot_mean_deg": result["error"]["rot_mean_deg"] if result["error"] else None,
                      "relations": result["error"]["relations"] if result["error"] else None,
                      "clean_relations": clean["relations"] if clean else None,
@@ -271,14 +285,14 @@ def clean_on_same_scans(args, clean_dir, perturbed_dir, relations):
 
 
 def print_public_table(rows):
-    print("| log | fault | severity | spec | method | clean (m) | perturbed (m) | ratio | relations |")
-    print("|---|---|---|---|---|---:|---:|---:|---:|")
+    print("| log | fault | severity | spec | method | clean (m) | perturbed (m) | ratio | odometry (m) | relations |")
+    print("|---|---|---|---|---|---:|---:|---:|---:|---:|")
     for r in rows:
         if r["fault"] == "clean":
             continue
         print(f"| {r['log']} | {r['fault']} | {r['severity']} | `{r['spec']}` | {r['method']} | {fmt(r['clean_trans_mean_m'])}"
               f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)}"
-              f" | {r['relations']}/{r['clean_relations']} |")
+              f" | {fmt(r['odometry_trans_mean_m'])} | {r['relations']}/{r['clean_relations']} |")
 
 
 # ---------------------------------------------------------------------------------------------
