@@ -39,7 +39,9 @@ using namespace pl_icp_detail;
 struct SourcePair {
   Point2 moved = Point2::Zero();   // Eq. (1), p_i^w
   Point2 normal = Point2::Zero();  // unit normal of the segment
-  double distance = 0.0;           // m, from p_i^w to the line of its segment
+  double distance = 0.0;           // m, from p_i^w to the line of its segment: Eq. (4)'s residual
+  double segment_distance = 0.0;   // m, from p_i^w to the segment itself: Eq. (3)'s trimming (CSM's)
+  double point_distance = 0.0;     // m, from p_i^w to p_j1: the doubles (CSM's)
   int j1 = kNone, j2 = kNone;      // target (index) points of the segment, kNone: no pair
   TrackedNearest nearest;          // j1 across iterations, with its certificate
 
@@ -107,10 +109,10 @@ struct SymmetricSum3 {
   }
 };
 
-// Eq. (1) and (2), fused: move each source point, find its segment and its distance to it.
+// Eq. (1) and (2), fused: move each source point, find its segment and its distances to it.
 // With `reject`, also the first rejections of Eq. (3), in the same pass: pairs whose segment is
-// too long are dropped, and ws.closest gets, per target point, the smallest distance of the
-// pairs on it (for the doubles). (j2 != kNone implies j1 != kNone: paired() tests j2 alone.)
+// too long are dropped, and ws.closest gets, per target point, the smallest distance |p_i^w - p_j1|
+// of the pairs on it (for the doubles). (j2 != kNone implies j1 != kNone: paired() tests j2 alone.)
 template <bool kReject>
 void find_correspondences(const TargetIndex& t, const PointCloud2& source, const SE2& T, const PlIcpConfig& config,
                           Workspace& ws) {
@@ -148,11 +150,17 @@ void find_correspondences(const TargetIndex& t, const PointCloud2& source, const
     const int segment = std::min(j1, j2);
     if (kReject && segment_lengths[segment] > max_length) continue;  // dropped: too long
     const Point2 normal = segment_normals[segment];
-    const double distance = std::abs(normal.dot(moved - targets[j1]));  // to the line, the metric of Eq. (4)
+    const Point2 offset = moved - targets[j1];
+    const double distance = std::abs(normal.dot(offset));  // to the line, the metric of Eq. (4)
+    // To the segment: beyond either end, to that end (the projection's parameter on j1 -> j2, clamped).
+    const Point2 along = targets[j2] - targets[j1];
+    const double u = std::clamp(offset.dot(along) / std::max(along.squaredNorm(), 1e-300), 0.0, 1.0);
     s.j2 = j2;
     s.normal = normal;
     s.distance = distance;
-    if (doubles) closest[j1] = std::min(closest[j1], distance);
+    s.segment_distance = (offset - u * along).norm();
+    s.point_distance = offset.norm();
+    if (doubles) closest[j1] = std::min(closest[j1], s.point_distance);
   }
 }
 
@@ -163,18 +171,23 @@ inline int unpair_unless(bool keep, int j2) {
   return j2 | (static_cast<int>(keep) - 1);
 }
 
-// Of the source points sharing a j1, drops all but the closest; collects the distances of the
-// rest into ws.distances and returns their count (the long segments went in
-// find_correspondences<true>).
+// CSM's kill_outliers_double: of the source points sharing a j1, drops those more than
+// kDoublesRatio times as far from p_j1 as the closest one. (Keeping the closest alone, or choosing
+// by the distance to the line, keeps the pairs that agree best with the current estimate: the
+// iteration then stops where it already is, with part of the guess's rotation error.)
+constexpr double kDoublesRatio = 3.0;
+
+// The doubles; collects the segment distances of the pairs kept into ws.distances and returns
+// their count (the long segments went in find_correspondences<true>).
 std::size_t drop_doubles(const PlIcpConfig& config, Workspace& ws) {
   double* const out = ws.distances.data();
   const double* const closest = ws.closest.data();
   const bool doubles = config.outliers_remove_doubles;
   std::size_t kept = 0;
   for (SourcePair& s : ws.pairs) {  // without a branch: which pairs go is data-dependent
-    const bool keep = s.paired() & !(doubles & (s.distance > closest[std::max(s.j1, 0)]));
+    const bool keep = s.paired() & !(doubles & (s.point_distance > kDoublesRatio * closest[std::max(s.j1, 0)]));
     s.j2 = unpair_unless(keep, s.j2);
-    out[kept] = s.distance;
+    out[kept] = s.segment_distance;
     kept += keep;
   }
   return kept;
@@ -214,7 +227,7 @@ Association reject_outliers(const PlIcpConfig& config, Workspace& ws) {
   const int count = static_cast<int>(ws.pairs.size());
   for (int i = 0; i < count; ++i) {  // without a branch, as in drop_doubles
     SourcePair& s = ws.pairs[i];
-    const bool keep = s.paired() & !(s.distance > limit);
+    const bool keep = s.paired() & !(s.segment_distance > limit);
     s.j2 = unpair_unless(keep, s.j2);
     const std::uint64_t pair = (static_cast<std::uint64_t>(s.j1) << 32) ^ static_cast<std::uint32_t>(s.j2);
     const std::uint64_t dropped = static_cast<std::uint64_t>(keep) - 1;  // all bits set, or none when kept
