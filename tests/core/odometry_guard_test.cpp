@@ -208,6 +208,40 @@ TEST(OdometryGuard, ShortOrBackwardTimeStepsDoNotShrinkTheBound) {
   EXPECT_TRUE(guard.check(9.99, SE2(0.25, 0.0, 0.0)).trusted());
 }
 
+// Stamps that carry no speed: the raw SLAM-corrected Orebro log stamps every scan 0, and its
+// scans lie about a metre apart; invented at one second a scan, its ordinary steps reach 3.3 m.
+TEST(OdometryGuard, StampsThatDoNotAdvanceCarryNoSpeed) {
+  OdometryGuard guard;
+  for (int k = 0; k < 20; ++k) {
+    const OdometryCheck check = guard.check(0.0, SE2(1.0 * k, 0.1 * (k % 3), 0.05 * k));
+    EXPECT_TRUE(check.trusted()) << k;
+  }
+  EXPECT_EQ(guard.stats().jumps, 0u);
+  EXPECT_EQ(guard.stats().speedless, 19u);
+  // A restart onto the origin is still a jump: it needs no speed.
+  EXPECT_EQ(guard.check(0.0, SE2()).fault, OdometryFault::kJump);
+}
+
+TEST(OdometryGuard, StepsWithinTheLogsOwnAreNoJumpsButAStepBeyondThemIs) {
+  OdometryGuard guard;
+  // One scan a second, steps of 1 to 3.3 m (Orebro's): beyond 2 m/s, within the log's own steps.
+  const double steps[] = {1.0, 1.1, 0.9, 2.0, 1.05, 3.0, 1.0, 1.2, 3.3, 0.95, 1.0, 2.4};
+  double x = 0.0;
+  guard.check(0.0, SE2());
+  for (int k = 0; k < 12; ++k) {
+    x += steps[k];
+    EXPECT_TRUE(guard.check(1.0 + k, SE2(x, 0.0, 0.0)).trusted()) << k;
+  }
+  EXPECT_EQ(guard.stats().speedless, 3u);  // the 3.0, 3.3 and 2.4 m steps
+  // 15 m in one second is a jump: beyond the speed bound and four times the log's steps.
+  EXPECT_EQ(guard.check(13.0, SE2(x + 15.0, 0.0, 0.0)).fault, OdometryFault::kJump);
+  // Off (step_factor 0), the speed bounds alone judge, as before.
+  OdometryGuard speed_only(OdometryGuardConfig{.step_factor = 0.0});
+  speed_only.check(0.0, SE2());
+  speed_only.check(1.0, SE2(1.0, 0.0, 0.0));
+  EXPECT_EQ(speed_only.check(2.0, SE2(4.0, 0.0, 0.0)).fault, OdometryFault::kJump);
+}
+
 TEST(OdometryGuard, DisabledTrustsEverything) {
   std::vector<SE2> poses = straight_drive(20, 0.5);
   for (int k = 6; k <= 9; ++k) poses[k] = poses[5];
@@ -219,6 +253,7 @@ TEST(OdometryGuard, RejectsInvalidConfigs) {
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_speed = 0.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.min_time_step = -1.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.jump_rotation_slack = -0.1}), Error);
+  EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.step_history = 2, .min_step_history = 3}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.max_held_stall = -1.0}), Error);
   EXPECT_THROW(OdometryGuard(OdometryGuardConfig{.restart_translation = -1e-3}), Error);
 }

@@ -11,6 +11,7 @@ namespace slam2d {
 void validate(const OdometryGuardConfig& config) {
   check_fields(config, "OdometryGuardConfig");
   check(config.max_startup_time >= config.min_time_step, "OdometryGuardConfig: max_startup_time must be >= min_time_step");
+  check(config.min_step_history <= config.step_history, "OdometryGuardConfig: min_step_history must be <= step_history");
 }
 
 OdometryGuard::OdometryGuard(const OdometryGuardConfig& config) : config_(config) { validate(config_); }
@@ -85,6 +86,7 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     return OdometryFault::kJump;
   }
   was_moving_ = moving;
+  if (moving) remember_step(increment);
   return OdometryFault::kNone;
 }
 
@@ -99,10 +101,42 @@ bool OdometryGuard::exceeds_startup(const SE2& increment, double dt) const {
          std::abs(increment.theta()) > 0.5 * config_.startup_angular_acceleration * step * step;
 }
 
-bool OdometryGuard::exceeds_bounds(const SE2& increment, double dt) const {
+// Beyond what the robot could have moved in dt (when the stamps carry speed) and beyond the log's
+// own steps, in translation or in rotation; an increment the speed bounds alone would have called
+// a jump is counted speedless.
+bool OdometryGuard::exceeds_bounds(const SE2& increment, double dt) {
   const double step = std::max(dt, config_.min_time_step);
-  return increment.translation().norm() > config_.max_speed * step + config_.jump_translation_slack ||
-         std::abs(increment.theta()) > config_.max_turn_rate * step + config_.jump_rotation_slack;
+  const double translation = increment.translation().norm();
+  const double rotation = std::abs(increment.theta());
+  const bool fast = translation > config_.max_speed * step + config_.jump_translation_slack;
+  const bool fast_turn = rotation > config_.max_turn_rate * step + config_.jump_rotation_slack;
+  if (!fast && !fast_turn) return false;
+  if (dt > 0.0 && ((fast && beyond_steps(translation, step_translations_)) ||
+                   (fast_turn && beyond_steps(rotation, step_rotations_)))) {
+    return true;
+  }
+  ++stats_.speedless;
+  return false;
+}
+
+// More than step_factor times the 90th percentile of the recent moving increments' `steps`; true
+// while too few are known (the speed bounds alone judge then).
+bool OdometryGuard::beyond_steps(double value, std::vector<double> steps) const {
+  if (config_.step_factor <= 0.0 || steps.size() < config_.min_step_history) return true;
+  const auto p90 = steps.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(steps.size() - 1));
+  std::nth_element(steps.begin(), p90, steps.end());
+  return value > config_.step_factor * *p90;
+}
+
+void OdometryGuard::remember_step(const SE2& increment) {
+  const std::size_t slot = steps_seen_++ % config_.step_history;
+  if (step_translations_.size() < config_.step_history) {
+    step_translations_.push_back(increment.translation().norm());
+    step_rotations_.push_back(std::abs(increment.theta()));
+  } else {
+    step_translations_[slot] = increment.translation().norm();
+    step_rotations_[slot] = std::abs(increment.theta());
+  }
 }
 
 }  // namespace slam2d

@@ -40,6 +40,13 @@
 //    held scans and wait for the catch-up (the RBPF does not: one update over a long stall loses
 //    its particles on FR079; docs/odometry_guard.md, "Long stalls"). An odometry frozen for
 //    longer is taken as lost, and the maps follow the scan matching again (as without odometry).
+//    The speed bounds need stamps that carry speed, and some logs have none: stamps all zero, or
+//    invented at one second a scan (the SLAM-corrected Orebro log, whose scans lie up to 3.3 m
+//    apart). So an increment is a jump only when it also stands out of the log's own steps: more
+//    than step_factor times the 90th percentile of the last step_history moving increments
+//    (translation or rotation alike; from min_step_history increments on); and an increment whose
+//    stamp did not advance (dt <= 0) carries no speed: only the restart test below applies to it.
+//    Either case is counted (speedless), and the summary warns of it.
 //  - restart: a step onto the odometry origin itself (to `restart_translation` and
 //    `restart_rotation`, 1 mm and 1 mrad) from a pose that was not there is a jump whatever its
 //    size. A driver or controller that restarts begins again at (0, 0, 0); after a gap of
@@ -67,6 +74,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/se2.hpp"
@@ -93,6 +101,11 @@ struct OdometryGuardConfig {
   double restart_rotation = 1e-3;
   // 30 s of driving is about what a catch-up's odometry still brings within the matchers' reach.
   double max_held_stall = 30.0;
+  // The log's own steps: a real jump (0.86 m at 10 Hz in the held-out log) is 8x its neighbours;
+  // an invented stamp's step (Orebro, 1 s a scan) at most 3.1x the log's median.
+  double step_factor = 4.0;
+  std::size_t step_history = 50;
+  std::size_t min_step_history = 3;
 };
 
 template <typename Fields>
@@ -122,6 +135,11 @@ void describe(Fields& f, OdometryGuardConfig& c) {
   f.number("restart_rotation", c.restart_rotation, "rad", at_least(0), "see restart_translation");
   f.number("max_held_stall", c.max_held_stall, "s", at_least(0),
            "a stall this young is waited out (OdometryCheck::hold_map); 0 holds nothing");
+  f.number("step_factor", c.step_factor, "1", at_least(0),
+           "a jump is also more than this times the 90th percentile of the recent moving increments (0: off)");
+  f.number("step_history", c.step_history, "1", at_least(1), "moving increments that percentile is taken over");
+  f.number("min_step_history", c.min_step_history, "1", at_least(1),
+           "moving increments needed before the step test applies (<= step_history)");
 }
 
 /// Throws Error for out-of-range values.
@@ -155,6 +173,8 @@ struct OdometryGuardStats {
   std::size_t catch_ups = 0;
   std::size_t jumps = 0;
   std::size_t gaps = 0;
+  std::size_t speedless = 0;       // increments beyond the speed bounds that the stamps could not judge
+                                   // (dt <= 0) or that stood within the log's own steps
   std::size_t untrusted() const { return stalled_scans + catch_ups + jumps; }
 };
 
@@ -173,7 +193,9 @@ class OdometryGuard {
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool exceeds_startup(const SE2& increment, double dt) const;
-  bool exceeds_bounds(const SE2& increment, double dt) const;
+  bool exceeds_bounds(const SE2& increment, double dt);
+  bool beyond_steps(double value, std::vector<double> steps) const;
+  void remember_step(const SE2& increment);
 
   OdometryGuardConfig config_;
   std::optional<SE2> last_pose_;
@@ -182,6 +204,9 @@ class OdometryGuard {
   bool was_moving_ = false;  // the last trusted increment moved
   bool stalled_ = false;     // inside a stall
   double lag_allowance_ = 0.0;  // s, added to the next dt: the length of a gap just passed
+  std::vector<double> step_translations_;  // m, the last step_history moving increments (a ring)
+  std::vector<double> step_rotations_;     // rad, their |rotation|
+  std::size_t steps_seen_ = 0;
   OdometryGuardStats stats_;
 };
 
