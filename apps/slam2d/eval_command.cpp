@@ -10,7 +10,9 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,6 +33,8 @@ namespace {
 struct EvalOptions {
   std::string trajectory;
   std::string relations;
+  std::optional<double> max_span;  // s: only relations whose stamps are at most this far apart
+  std::optional<double> min_span;  // s: ... more than this far apart
   std::string reference;
   double stamp_tolerance = 0.001;
   double rpe_delta = 1.0;
@@ -120,7 +124,16 @@ void run_eval(const EvalOptions& options) {
   JsonObject errors;
   if (!options.relations.empty()) {
     json.add("relations_file", options.relations);
-    const std::vector<Relation> relations = read_relations(options.relations);
+    std::vector<Relation> relations = read_relations(options.relations);
+    if (options.max_span || options.min_span) {  // the relations whose stamps lie within the span
+      std::erase_if(relations, [&](const Relation& r) {
+        const double span = std::abs(r.stamp_to - r.stamp_from);
+        return (options.max_span && span > *options.max_span) || (options.min_span && span <= *options.min_span);
+      });
+      check(!relations.empty(), "eval: no relation of " + options.relations + " lies within the span given");
+      if (options.max_span) json.add("max_span_s", *options.max_span);
+      if (options.min_span) json.add("min_span_s", *options.min_span);
+    }
     table = relation_table(add_relation_error(json, estimate, relations, options.stamp_tolerance), relations);
     errors.add("relations", table.json());
   } else {
@@ -146,6 +159,10 @@ void add_eval_command(CLI::App& app) {
   auto* relations = command->add_option("--relations", options->relations, "Relations file 't1 t2 x y z roll pitch yaw'");
   auto* reference = command->add_option("--reference", options->reference, "Reference trajectory: ATE and RPE");
   relations->excludes(reference);
+  command->add_option("--max-span", options->max_span, "s: score only the relations whose two stamps are at most this far apart")
+      ->check(CLI::PositiveNumber)->needs(relations);
+  command->add_option("--min-span", options->min_span, "s: score only the relations whose two stamps are more than this far apart")
+      ->check(CLI::NonNegativeNumber)->needs(relations);
   reference->excludes(relations);
   command->add_option("--stamp-tolerance", options->stamp_tolerance, "s: poses are matched by nearest stamp within this")
       ->capture_default_str();

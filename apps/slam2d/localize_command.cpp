@@ -94,7 +94,7 @@ void run_localize(const LocalizeOptions& options) {
   summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
   summary.merge(odometry_report(session.odometry_stats()));
   std::vector<std::string> warnings = reader_warnings(reader);
-  if (const auto warning = odometry_warning(session.odometry_stats())) warnings.push_back(*warning);
+  for (std::string& warning : odometry_warnings(session.odometry_stats())) warnings.push_back(std::move(warning));
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
   summary.add("us_per_update", 1e6 * run.localizer_cpu_s / static_cast<double>(std::max<std::size_t>(run.sensor_updates, 1)));

@@ -58,7 +58,7 @@ constexpr double kChainScanRate = 3.0;
 // The odometry guard's counts and its warning, into the run.
 void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
   run.method_summary.merge(odometry_report(stats));
-  if (const auto warning = odometry_warning(stats)) run.warnings.push_back(*warning);
+  for (std::string& warning : odometry_warnings(stats)) run.warnings.push_back(std::move(warning));
 }
 
 // Where each scan's odometry pose comes from (MapJobOptions::odometry_source, resolved).
@@ -207,7 +207,10 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
   run.map = slam.map().level(0).to_occupancy_map();
   run.resolution = config.map.grid.resolution;
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
-  if (feed.uses_odometry()) report_odometry(run, slam.odometry_stats());
+  if (feed.uses_odometry()) {
+    report_odometry(run, slam.odometry_stats());
+    run.method_summary.merge(fusion_report(slam.fusion_stats(), slam.odometry_noise()));
+  }
   return run;
 }
 // Graph SLAM (slam/graph): keyframes, scan-to-local-map constraints, loop closure, sparse pose
@@ -239,7 +242,11 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   }
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
-  if (feed.uses_odometry()) report_odometry(run, slam.odometry_stats());
+  if (feed.uses_odometry()) {
+    report_odometry(run, slam.odometry_stats());
+    run.method_summary.add("odometry_edges", stats.odometry_edges);
+    run.method_summary.merge(fusion_report(stats.fusion, slam.odometry_noise()));
+  }
   return run;
 }
 

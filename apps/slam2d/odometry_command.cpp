@@ -158,7 +158,8 @@ void run_odometry(const OdometryOptions& options) {
   std::vector<std::string> warnings = reader_warnings(reader);
   if (!options.no_odometry) {
     summary.merge(odometry_report(odometry.odometry_stats()));
-    if (const auto warning = odometry_warning(odometry.odometry_stats())) warnings.push_back(*warning);
+    summary.merge(fusion_report(stats.fusion, odometry.odometry_noise()));
+    for (std::string& warning : odometry_warnings(odometry.odometry_stats())) warnings.push_back(std::move(warning));
   }
   summary.add("warnings", warnings);
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);

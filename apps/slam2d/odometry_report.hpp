@@ -7,8 +7,10 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "json.hpp"
+#include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 
 namespace slam2d::cli {
@@ -17,18 +19,38 @@ inline JsonObject odometry_report(const OdometryGuardStats& stats) {
   JsonObject report;
   report.add("odometry_stalls", stats.stalls).add("odometry_stalled_scans", stats.stalled_scans);
   report.add("odometry_catch_ups", stats.catch_ups).add("odometry_jumps", stats.jumps);
-  report.add("odometry_gaps", stats.gaps);
+  report.add("odometry_gaps", stats.gaps).add("odometry_speedless", stats.speedless);
+  return report;
+}
+
+/// How odometry and scan matching were weighed: the fusions, the disagreements and their winners,
+/// and the odometry noise model's learnt scales.
+inline JsonObject fusion_report(const MotionFusionStats& stats, const OdometryNoiseModel& noise) {
+  JsonObject report;
+  report.add("fusion_fused", stats.fused).add("fusion_disagreements", stats.disagreements());
+  report.add("fusion_odometry_won", stats.odometry_won).add("fusion_match_won", stats.match_won);
+  report.add("odometry_noise_scale_translation", noise.translation_scale());
+  report.add("odometry_noise_scale_rotation", noise.rotation_scale());
   return report;
 }
 
 /// A warning when the guard did not trust at least 1 % of the increments, or any jump: then the
-/// odometry was unreliable and those scans rest on scan matching alone.
-inline std::optional<std::string> odometry_warning(const OdometryGuardStats& stats) {
+/// odometry was unreliable and those scans rest on scan matching alone; and one when the stamps
+/// could not judge the odometry's speed (all equal, invented).
+inline std::vector<std::string> odometry_warnings(const OdometryGuardStats& stats) {
+  std::vector<std::string> warnings;
+  if (stats.speedless > 0) {
+    warnings.push_back(fmt::format(
+        "odometry: {} of {} increments exceeded the speed bounds where the stamps carry no speed (not advancing, "
+        "or the log's ordinary steps): there the speed bounds were off and the log's own step sizes judged jumps",
+        stats.speedless, stats.checks));
+  }
   const bool many = 100 * stats.untrusted() >= stats.checks && stats.untrusted() > 0;
-  if (!many && stats.jumps == 0) return std::nullopt;
-  return fmt::format("odometry: {} of {} increments not trusted ({} stalls over {} scans, {} catch-ups, {} jumps); "
+  if (!many && stats.jumps == 0) return warnings;
+  warnings.push_back(fmt::format("odometry: {} of {} increments not trusted ({} stalls over {} scans, {} catch-ups, {} jumps); "
                      "those scans were placed by scan matching alone",
-                     stats.untrusted(), stats.checks, stats.stalls, stats.stalled_scans, stats.catch_ups, stats.jumps);
+                     stats.untrusted(), stats.checks, stats.stalls, stats.stalled_scans, stats.catch_ups, stats.jumps));
+  return warnings;
 }
 
 }  // namespace slam2d::cli

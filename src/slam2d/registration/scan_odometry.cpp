@@ -36,7 +36,10 @@ MatchResult match_between_robots(const MatchResult& match, const SE2& T_robot_ta
 }
 
 ScanOdometry::ScanOdometry(Matcher matcher, const ScanOdometryConfig& config)
-    : matcher_(std::move(matcher)), config_(config), odometry_guard_(config.odometry_guard) {
+    : matcher_(std::move(matcher)),
+      config_(config),
+      odometry_guard_(config.odometry_guard),
+      odometry_noise_(config.odometry_noise) {
   check(static_cast<bool>(matcher_), "scan odometry: no matcher given");
   validate(config_);
 }
@@ -72,6 +75,20 @@ bool ScanOdometry::passes_gate(const MatchResult& match, const SE2& guess, std::
   const SE2 correction = guess.between(match.T_target_source);
   return correction.translation().norm() <= config_.max_correction_distance &&
          std::abs(correction.theta()) <= config_.max_correction_angle;
+}
+
+// The motion from the keyframe measured twice, by the trusted odometry and by the accepted match
+// (moved into the robots' frames with its covariance), fused (core/motion_fusion.hpp); the
+// agreement teaches the odometry's noise model its scale.
+SE2 ScanOdometry::fuse_with_odometry(const SE2& odometry, const SE2& T_keyframe_robot, const SE2& T_robot_sensor) {
+  MatchResult moved = match_between_robots(last_match_, keyframe_->T_robot_sensor, T_robot_sensor);
+  moved.T_target_source = T_keyframe_robot;
+  const MotionMeasurement match = match_measurement(moved, config_.match_noise);
+  const FusedMotion fused =
+      fuse_motion({odometry, odometry_noise_.covariance(odometry)}, match, config_.fusion_gate);
+  stats_.fusion.count(fused.outcome);
+  if (!moved.degenerate) odometry_noise_.observe(odometry, match.value, match.covariance);
+  return fused.value;
 }
 
 void ScanOdometry::update_velocity(double stamp, const SE2& T_world_robot) {
@@ -127,6 +144,10 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
     last_accepted_ = passes_gate(last_match_, guess_sensor, cloud.size());
     if (last_accepted_) {
       T_keyframe_robot = keyframe_->T_robot_sensor * last_match_.T_target_source * scan.T_robot_sensor.inverse();
+      const bool odometry_guess = guarded && keyframe_->odom_pose;
+      if (odometry_guess && config_.fuse_odometry) {
+        T_keyframe_robot = fuse_with_odometry(guess, T_keyframe_robot, scan.T_robot_sensor);
+      }
     }
   }
   if (!last_accepted_) ++stats_.failures;

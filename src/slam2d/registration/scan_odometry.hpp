@@ -20,7 +20,13 @@
 //   - it moved the guess by at most max_correction_distance and max_correction_angle
 //     (in the keyframe's sensor frame: the correction is guess^-1 * result).
 // Otherwise the guess is taken, a failure is counted and the scan becomes the new keyframe
-// (the old one evidently no longer matches). Scans with fewer than 3 usable points are not
+// (the old one evidently no longer matches): the odometry's increment where the guard trusts it.
+// An accepted match and a trusted odometry increment are two measurements of the motion from the
+// keyframe, each with its covariance (core/motion_fusion.hpp: the odometry's from its motion
+// noise model, whose scale is learnt from their agreement; the match's from the matcher, floored
+// and inflated along a degenerate direction: registration/match_fusion.hpp): they are fused by
+// information, or, where they disagree beyond their joint uncertainty, the better-conditioned
+// one is kept (`fuse_odometry`, off by default). Without odometry the match alone places the scan. Scans with fewer than 3 usable points are not
 // matched (a failure; the keyframe stays).
 //
 // World frame: the first scan's odometry pose T_odom_robot when it is given (so the trajectory
@@ -32,10 +38,12 @@
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
+#include "slam2d/registration/match_fusion.hpp"
 #include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
@@ -56,6 +64,12 @@ struct ScanOdometryConfig {
   // replaces the increment in the odometry the next predictions start from; a catch-up is
   // applied from the scan where the odometry last moved.
   OdometryGuardConfig odometry_guard{};
+  // Off by default: over range-noise seeds it did not beat the match alone (docs/methods/pl_icp.md,
+  // "Fusion with the odometry").
+  bool fuse_odometry = false;
+  OdometryNoiseConfig odometry_noise{};
+  MatchNoiseConfig match_noise{.floor_translation = 0.005, .floor_rotation = 0.0005};
+  double fusion_gate = kMotionGateChi2;
 };
 
 template <typename Fields>
@@ -72,6 +86,11 @@ void describe(Fields& f, ScanOdometryConfig& c) {
   f.number("max_correction_distance", c.max_correction_distance, "m", greater_than(0), "gate on |t| of guess^-1 * result (CSM ROS: 0.5)");
   f.number("max_correction_angle", c.max_correction_angle, "rad", greater_than(0), "gate on |theta| of guess^-1 * result");
   f.section("odometry_guard", c.odometry_guard, "which odometry increments are trusted (core/odometry_guard.hpp)");
+  f.flag("fuse_odometry", c.fuse_odometry, "fuse an accepted match with the trusted odometry increment (false: the match alone)");
+  f.section("odometry_noise", c.odometry_noise, "the odometry's motion noise model (core/motion_fusion.hpp)");
+  f.section("match_noise", c.match_noise, "the match's covariance for the fusion (registration/match_fusion.hpp)");
+  f.number("fusion_gate", c.fusion_gate, "1", greater_than(0),
+           "chi-square (3 dof) beyond which odometry and match disagree and the better-conditioned one wins");
 }
 
 /// Throws Error for values outside the ranges above.
@@ -84,6 +103,7 @@ struct ScanOdometryStats {
   std::size_t keyframes = 0;       // keyframes taken, the first scan included
   std::size_t total_iterations = 0;  // sum of MatchResult::iterations
   double matcher_seconds = 0.0;    // s, wall time spent inside the matcher
+  MotionFusionStats fusion;              // accepted matches fused with the odometry, and the disagreements' winners
 };
 
 /// A scan-to-scan match moved from the sensor frames into the robots' frames:
@@ -112,6 +132,7 @@ class ScanOdometry {
   const SE2& last_target_T_robot_sensor() const { return last_target_T_robot_sensor_; }
   const ScanOdometryConfig& config() const { return config_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
+  const OdometryNoiseModel& odometry_noise() const { return odometry_noise_; }
 
  private:
   struct Keyframe {
@@ -124,11 +145,13 @@ class ScanOdometry {
   PointCloud2 usable_cloud(const LaserScan& scan) const;
   SE2 predict(double stamp, const std::optional<SE2>& odom_pose) const;  // T_keyframe_robot
   bool passes_gate(const MatchResult& match, const SE2& guess, std::size_t points) const;
+  SE2 fuse_with_odometry(const SE2& odometry, const SE2& T_keyframe_robot, const SE2& T_robot_sensor);
   void update_velocity(double stamp, const SE2& T_world_robot);
 
   Matcher matcher_;
   ScanOdometryConfig config_;
   OdometryGuard odometry_guard_;
+  OdometryNoiseModel odometry_noise_;
   // The odometry with each untrusted increment replaced by the estimated motion: correction * raw
   // (none until the first untrusted increment, so clean odometry is used exactly as logged).
   std::optional<SE2> odometry_correction_;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/slam/graph/graph_slam.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,6 +9,7 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
+#include "slam2d/registration/match_fusion.hpp"
 #include "slam2d/registration/normals.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
 
@@ -29,10 +31,15 @@ void validate(const GraphSlamConfig& config) {
   check(config.max_range > config.min_range, "GraphSlamConfig: max_range must be > min_range");
   validate(config.tracking);
   validate(config.loop_closure);
+  validate(config.odometry_noise);
 }
 
 GraphSlam::GraphSlam(const GraphSlamConfig& config)
-    : config_(config), selector_(config.keyframes), back_end_(config.back_end), loop_closer_(config.loop_closure) {
+    : config_(config),
+      selector_(config.keyframes),
+      back_end_(config.back_end),
+      loop_closer_(config.loop_closure),
+      odometry_noise_(config.odometry_noise) {
   validate(config_);
 }
 
@@ -79,8 +86,9 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
   // The tracked motion since the last keyframe, carried from its (optimised) graph pose.
   const SE2 estimate = first ? SE2() : graph_.poses[keyframes_.back().node] * T_tracker_keyframe_.between(tracked.T_map_robot);
   step.matched = tracked.matched && !tracked.match.degenerate;
+  accumulate_odometry(tracked);
   if (first || selector_.is_keyframe(estimate, scan.stamp)) {
-    add_keyframe(scan, estimate, first || step.matched);
+    add_keyframe(scan, estimate, tracked, first || step.matched);
     T_tracker_keyframe_ = tracked.T_map_robot;
     step.keyframe = true;
     step.loop_closures = close_loops(keyframes_.size() - 1, false);
@@ -94,7 +102,46 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
   return step;
 }
 
-void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched) {
+// The odometry's increment since the last keyframe, intact while the guard trusted every one.
+void GraphSlam::accumulate_odometry(const HectorStep& tracked) {
+  if (tracked.odometry.first || tracked.odometry.trusted()) {
+    odometry_since_keyframe_ = odometry_since_keyframe_ * tracked.odometry.increment;
+  } else {
+    odometry_intact_ = false;
+  }
+}
+
+// The tracker's match covariance at the keyframe, twice (the previous keyframe was matched against
+// the same local map), on the floor of the sequential sigmas and inflated along a degenerate
+// direction (registration/match_fusion.hpp).
+Covariance3 GraphSlam::sequential_covariance(const HectorStep& tracked) const {
+  const double floor = config_.sequential_sigma_translation;
+  const Covariance3 fixed = covariance_from_sigmas(floor, floor, config_.sequential_sigma_rotation);
+  if (!config_.sequential_from_match || !tracked.matched) return fixed;
+  MatchResult match = tracked.match;
+  match.covariance *= 2.0;
+  const MatchNoiseConfig noise{.floor_translation = floor,
+                               .floor_rotation = config_.sequential_sigma_rotation,
+                               .degenerate_sigma = config_.degenerate_sigma};
+  const MotionMeasurement measurement = match_measurement(match, noise);
+  return measurement.covariance.diagonal().maxCoeff() >= kUnknownVariance ? fixed : measurement.covariance;
+}
+
+// The odometry edge beside a sequential edge: the guarded odometry's increment between the two
+// keyframes with the motion noise model's covariance; the two edges' agreement teaches the model.
+void GraphSlam::add_odometry_edge(const PoseGraphEdge& sequential) {
+  const Covariance3 covariance = odometry_noise_.covariance(odometry_since_keyframe_);
+  const Covariance3 sequential_covariance = sequential.information.inverse();
+  stats_.fusion.count(fuse_motion({odometry_since_keyframe_, covariance}, {sequential.T_from_to, sequential_covariance}).outcome);
+  PoseGraphEdge edge = sequential;
+  edge.T_from_to = odometry_since_keyframe_;
+  edge.information = information_from_covariance(covariance);
+  graph_.edges.push_back(edge);
+  ++stats_.odometry_edges;
+  odometry_noise_.observe(odometry_since_keyframe_, sequential.T_from_to, sequential_covariance);
+}
+
+void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked, bool matched) {
   Keyframe keyframe;
   keyframe.node = graph_.poses.size();
   keyframe.scan = stats_.scans;
@@ -110,14 +157,14 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, bool ma
     edge.from = static_cast<int>(previous.node);
     edge.to = static_cast<int>(keyframe.node);
     edge.T_from_to = T_map_previous.between(estimate);
-    const double sigma_translation = config_.sequential_sigma_translation;
-    const Covariance3 covariance =
-        covariance_from_sigmas(sigma_translation, sigma_translation, config_.sequential_sigma_rotation);
-    edge.information = information_from_covariance(covariance);
+    edge.information = information_from_covariance(sequential_covariance(tracked));
     graph_.edges.push_back(edge);
     keyframe_motion_.push_back(edge.T_from_to);
     if (!matched) ++stats_.sequential_failures;
+    if (config_.odometry_edges && odometry_intact_) add_odometry_edge(edge);
   }
+  odometry_since_keyframe_ = SE2();
+  odometry_intact_ = tracker_ && tracker_->config().prior == MotionPrior::kOdometry;
   graph_.poses.push_back(estimate);
   selector_.accept(estimate, scan.stamp);
   scans_.push_back({scan.stamp, keyframes_.size(), SE2()});

@@ -7,11 +7,18 @@
 //
 // 1. keyframes: a scan becomes a node when the robot moved min_distance or turned min_angle since
 //    the last keyframe, or min_time passed (keyframes.hpp);
-// 2. sequential constraint: every scan is tracked against a local occupancy-grid map by
+// 2. sequential constraints: every scan is tracked against a local occupancy-grid map by
 //    Gauss-Newton on a map pyramid (Hector's matcher, slam/hector, with a weak prior at the
-//    odometry prediction); the tracked motion from the previous keyframe is the edge, with a small
-//    fixed covariance (a scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
-//    matches do, so the chain is stiff and the loop edges bend it only where it drifted);
+//    odometry prediction); the tracked motion from the previous keyframe is the edge. Its
+//    covariance is the match's at the new keyframe (registration/match_fusion.hpp: the Hessian's,
+//    twice, for the two ends matched against one local map), with a small floor (a scan-to-map
+//    match does not drift from keyframe to keyframe as scan-to-scan matches do, so where the scan
+//    sees every direction the chain is stiff and the loop edges bend it only where it drifted);
+//    where the scan leaves a direction open, the edge is loose along it. Beside it, when the scans
+//    come with odometry, an odometry edge: the guarded odometry's increment between the two
+//    keyframes, with the covariance of the odometry's motion noise model (core/motion_fusion.hpp),
+//    whose scale is learnt from how well the two edges agree; the back end weighs the two by their
+//    information. An increment the odometry guard did not trust leaves that odometry edge out;
 // 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
 //    local map searched over a large window by branch-and-bound, accepted above a response
 //    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
@@ -39,6 +46,7 @@
 #include <vector>
 
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
@@ -64,8 +72,13 @@ struct GraphSlamConfig {
   // (Hector's no-odometry settings, without the prior and the remapping): tracking.prior itself
   // is ignored.
   HectorSlamConfig tracking = default_tracking_config();
-  double sequential_sigma_translation = 0.002;
+  double sequential_sigma_translation = 0.002;  // the sequential edge's floor
   double sequential_sigma_rotation = 0.001;
+  // The tracker's match covariance on top of the floor (false: the floor alone, a fixed covariance).
+  bool sequential_from_match = true;
+  double degenerate_sigma = 1.0;  // m (rad) added along a degenerate match's weak direction
+  bool odometry_edges = true;
+  OdometryNoiseConfig odometry_noise{};
   LoopClosureConfig loop_closure{};
   SparsePoseAdjustmentConfig back_end{.loop_kernel = {.type = RobustKernelType::kCauchy, .scale = 3.0}};
   double map_resolution = 0.05;
@@ -81,6 +94,12 @@ void describe(Fields& f, GraphSlamConfig& c) {
   f.number("sequential_sigma_translation", c.sequential_sigma_translation, "m", greater_than(0),
            "standard deviation of a sequential edge's translation");
   f.number("sequential_sigma_rotation", c.sequential_sigma_rotation, "rad", greater_than(0), "... and rotation");
+  f.flag("sequential_from_match", c.sequential_from_match,
+         "add the tracker's match covariance (twice) to those sigmas (false: a fixed covariance)");
+  f.number("degenerate_sigma", c.degenerate_sigma, "m", at_least(0),
+           "sigma added along the weak direction of a degenerate tracker match");
+  f.flag("odometry_edges", c.odometry_edges, "an odometry edge beside each sequential edge, when the scans come with odometry");
+  f.section("odometry_noise", c.odometry_noise, "the odometry edges' motion noise model (core/motion_fusion.hpp)");
   f.section("loop_closure", c.loop_closure, "the loop closer");
   f.section("back_end", c.back_end, "the sparse pose adjustment");
   f.number("map_resolution", c.map_resolution, "m per cell", greater_than(0), "of the occupancy map built from the keyframes");
@@ -112,6 +131,8 @@ struct GraphSlamStats {
   std::size_t optimizations = 0;
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
+  std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
+  MotionFusionStats fusion;             // the two edges of each keyframe step: consistent, or which was surer
   double optimization_seconds = 0.0;    // wall time of the back end
   double loop_seconds = 0.0;            // wall time of loop closing (searches and verification)
   double global_search_seconds = 0.0;   // wall time of the global searches (part of loop_seconds)
@@ -141,6 +162,7 @@ class GraphSlam {
   /// What the tracker's odometry guard found (empty before the first scan or without odometry).
   OdometryGuardStats odometry_stats() const { return tracker_ ? tracker_->odometry_stats() : OdometryGuardStats{}; }
   const GraphSlamConfig& config() const { return config_; }
+  const OdometryNoiseModel& odometry_noise() const { return odometry_noise_; }
 
  private:
   struct ScanRecord {
@@ -151,7 +173,10 @@ class GraphSlam {
 
   PointCloud2 scan_cloud(const LaserScan& scan) const;
   HectorStep track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot);
-  void add_keyframe(const LaserScan& scan, const SE2& estimate, bool matched);
+  void add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked, bool matched);
+  Covariance3 sequential_covariance(const HectorStep& tracked) const;
+  void accumulate_odometry(const HectorStep& tracked);
+  void add_odometry_edge(const PoseGraphEdge& sequential);
   int close_loops(std::size_t current, bool final);
   int add_closures(const std::vector<LoopClosure>& closures, bool final);
   bool lifelong() const { return config_.keyframes.redundant_radius > 0.0; }
@@ -181,6 +206,9 @@ class GraphSlam {
   std::optional<HectorSlam> tracker_;  // made at the first scan, when it is known whether odometry comes
   SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
   std::size_t release_checked_ = 0;  // lifelong: the first keyframe not yet checked for release
+  OdometryNoiseModel odometry_noise_;
+  SE2 odometry_since_keyframe_;       // the odometry's increments since the last keyframe, composed
+  bool odometry_intact_ = false;      // ... all trusted by the guard (and odometry came)
 };
 
 }  // namespace slam2d

@@ -40,10 +40,14 @@ void validate(const HectorSlamConfig& config) {
   check_fields(config, "HectorSlamConfig");
   check(config.max_range > config.min_range, "HectorSlamConfig: max_range must be > min_range");
   validate(config.matcher);
+  validate(config.odometry_noise);
 }
 
 HectorSlam::HectorSlam(const HectorSlamConfig& config)
-    : config_(config), odometry_guard_(config.odometry_guard), map_(map_config(config)) {
+    : config_(config),
+      odometry_guard_(config.odometry_guard),
+      map_(map_config(config)),
+      odometry_noise_(config.odometry_noise) {
   validate(config_);
   free_matcher_ = config_.matcher;
   free_matcher_.rotation_search_range = config_.rotation_search_without_odometry;
@@ -76,11 +80,13 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
     step.matched = true;
     step.T_map_robot = step.match.T_target_source;
     step.covariance = step.match.covariance;
+    fuse(step);
   }
   if (!last_pose_ || (!odometry_.hold_map && needs_map_update(step.T_map_robot))) {
     integrate(corrected, inputs, step.T_map_robot);
     step.map_updated = true;
   }
+  if (last_pose_) last_covariance_ = step.covariance;
   previous_dt_ = last_pose_ ? scan.stamp - last_stamp_ : 0.0;
   previous_pose_ = last_pose_;
   last_pose_ = step.T_map_robot;
@@ -88,6 +94,28 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   last_stamp_ = scan.stamp;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
   return step;
+}
+
+// The match and the odometry's prediction as two measurements of the pose (the header's fusion):
+// the prediction's covariance is the last pose's plus the motion noise of the trusted increment
+// (in the map frame); the match's, registration/match_fusion.hpp's. Without a trusted increment
+// (no odometry, a stall, a catch-up, a jump) the match stands, with its floored covariance.
+void HectorSlam::fuse(HectorStep& step) {
+  const MotionMeasurement match = match_measurement(step.match, config_.match_noise);
+  const bool known = match.covariance.diagonal().maxCoeff() < kUnknownVariance;
+  if (known) step.covariance = match.covariance;
+  if (!config_.fuse_odometry || config_.prior != MotionPrior::kOdometry || !odometry_.trusted() || !known) return;
+  const Covariance3 motion = rotate_covariance(odometry_noise_.covariance(odometry_.increment), last_pose_->theta());
+  const FusedMotion fused =
+      fuse_motion({step.prediction, last_covariance_ + motion}, match, config_.fusion_gate);
+  // The odometry's noise is learnt from the match's motion since the last pose, whose uncertainty
+  // is the two poses' (the last one's already counted in the prediction).
+  odometry_noise_.observe(odometry_.increment, last_pose_->between(match.value),
+                          rotate_covariance(last_covariance_ + match.covariance, -last_pose_->theta()));
+  fusion_stats_.count(fused.outcome);
+  step.fusion = fused.outcome;
+  step.T_map_robot = fused.value;
+  step.covariance = fused.covariance;
 }
 
 MatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const {

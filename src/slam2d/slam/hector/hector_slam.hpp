@@ -14,10 +14,12 @@
 
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/laser_scan.hpp"
+#include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
+#include "slam2d/registration/match_fusion.hpp"
 #include "slam2d/registration/occupancy_gradient_match.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
 
@@ -88,6 +90,18 @@ struct HectorSlamConfig {
   // odometry (the settings above, no prior, no solution remapping) from two starts, and the
   // better fit is kept (HectorSlam::untrusted_starts).
   OdometryGuardConfig odometry_guard{};
+  // Fusion by uncertainty (core/motion_fusion.hpp; not in the paper): where the odometry is
+  // trusted, the match is one measurement of the pose and the prediction another, a Kalman
+  // filter's: the last pose's covariance plus the odometry's motion noise (its scale learnt from
+  // the matches), against the match's covariance (the Gauss-Newton Hessian's, floored and inflated
+  // along a degenerate direction: registration/match_fusion.hpp). Consistent, they are averaged by
+  // their information; disagreeing beyond the gate, the better-conditioned one stands alone. A
+  // scan that carries little (noise, glass, a corridor) so leaves the step to the odometry.
+  // Off by default: see docs/methods/hector.md, "Fusion by uncertainty".
+  bool fuse_odometry = false;
+  OdometryNoiseConfig odometry_noise{};
+  MatchNoiseConfig match_noise{.floor_translation = 0.0, .floor_rotation = 0.0};
+  double fusion_gate = kMotionGateChi2;
 };
 
 template <typename Fields>
@@ -121,6 +135,11 @@ void describe(Fields& f, HectorSlamConfig& c) {
   f.number("recovery_residual_without_odometry", c.recovery_residual_without_odometry, "1", at_least(0),
            "recovery_residual without odometry");
   f.section("odometry_guard", c.odometry_guard, "the check of each odometry increment");
+  f.flag("fuse_odometry", c.fuse_odometry, "fuse each match with the odometry's prediction by their covariances");
+  f.section("odometry_noise", c.odometry_noise, "the odometry's motion noise model (core/motion_fusion.hpp)");
+  f.section("match_noise", c.match_noise, "the match's covariance for the fusion (registration/match_fusion.hpp)");
+  f.number("fusion_gate", c.fusion_gate, "1", greater_than(0),
+           "chi-square (3 dof) beyond which prediction and match disagree and the better-conditioned one wins");
 }
 
 /// Extra inputs of one scan.
@@ -138,6 +157,7 @@ struct HectorStep {
   bool matched = false;                          // false on the first scan (no map yet)
   bool map_updated = false;
   OdometryCheck odometry;                        // the guard's verdict (kOdometry prior only)
+  std::optional<FusionOutcome> fusion;           // how the match met the odometry's prediction, if fused
 };
 
 /// Throws Error for negative or non-finite ranges/thresholds, min_range >= max_range, or an invalid
@@ -157,6 +177,8 @@ class HectorSlam {
   std::size_t map_updates() const { return map_updates_; }
   const HectorSlamConfig& config() const { return config_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
+  const MotionFusionStats& fusion_stats() const { return fusion_stats_; }
+  const OdometryNoiseModel& odometry_noise() const { return odometry_noise_; }
 
  private:
   MatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
@@ -172,6 +194,7 @@ class HectorSlam {
   bool odometry_trusted() const;
   SE2 predict(const LaserScan& scan) const;
   double angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const;
+  void fuse(HectorStep& step);
   bool needs_map_update(const SE2& T_map_robot) const;
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
 
@@ -189,6 +212,9 @@ class HectorSlam {
   double previous_dt_ = 0.0;           // s, between the two previous scans
   SE2 last_update_pose_;
   std::size_t map_updates_ = 0;
+  OdometryNoiseModel odometry_noise_;
+  MotionFusionStats fusion_stats_;
+  Covariance3 last_covariance_ = Covariance3::Zero();  // of last_pose_ in the map (the first scan's: zero)
 };
 
 }  // namespace slam2d

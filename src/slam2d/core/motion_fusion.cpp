@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// One motion measured by the odometry and by a scan match, fused by information; see motion_fusion.hpp.
+
+#include "slam2d/core/motion_fusion.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
+
+namespace slam2d {
+
+namespace {
+
+// b - a in (x, y, theta), the heading wrapped.
+Eigen::Vector3d difference(const SE2& a, const SE2& b) {
+  Eigen::Vector3d d = b.vector() - a.vector();
+  d.z() = angle_difference(b.theta(), a.theta());
+  return d;
+}
+
+bool unknown(const Covariance3& covariance) { return covariance.diagonal().maxCoeff() >= kUnknownVariance; }
+
+// One sample of a squared scale: (the residual's variance per degree of freedom, clipped at the
+// gate of the current total, less the measurement's) over the model's, within the bounds.
+double scale2_sample(double residual2_per_dof, double model_variance, double measured_variance, double scale2,
+                     const OdometryNoiseConfig& config) {
+  const double clip = kMotionGateChi2 / 3.0 * (scale2 * model_variance + measured_variance);
+  const double sample = (std::min(residual2_per_dof, clip) - measured_variance) / model_variance;
+  return std::clamp(sample, config.min_scale * config.min_scale, config.max_scale * config.max_scale);
+}
+
+}  // namespace
+
+void validate(const OdometryNoiseConfig& config) {
+  check_fields(config, "OdometryNoiseConfig");
+  check(config.min_scale <= 1.0, "OdometryNoiseConfig: min_scale must be <= 1");
+}
+
+OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config) : config_(config) { validate(config_); }
+
+double OdometryNoiseModel::sigma_translation(const SE2& increment) const {
+  return config_.rest_translation + config_.translation_per_metre * increment.translation().norm() +
+         config_.translation_per_radian * std::abs(increment.theta());
+}
+
+double OdometryNoiseModel::sigma_rotation(const SE2& increment) const {
+  return config_.rest_rotation + config_.rotation_per_metre * increment.translation().norm() +
+         config_.rotation_per_radian * std::abs(increment.theta());
+}
+
+Covariance3 OdometryNoiseModel::covariance(const SE2& increment) const {
+  const double translation = translation_scale_ * sigma_translation(increment);
+  return covariance_from_sigmas(translation, translation, rotation_scale_ * sigma_rotation(increment));
+}
+
+void OdometryNoiseModel::observe(const SE2& increment, const SE2& measured, const Covariance3& measured_covariance) {
+  if (config_.window <= 0.0 || unknown(measured_covariance)) return;
+  const Eigen::Vector3d e = difference(increment, measured);
+  if (!e.allFinite()) return;
+  ++observations_;
+  const double weight = 1.0 / std::min(static_cast<double>(observations_), config_.window);
+  const double translation_model = std::pow(sigma_translation(increment), 2);
+  const double translation_measured = 0.5 * (measured_covariance(0, 0) + measured_covariance(1, 1));
+  double scale2 = translation_scale_ * translation_scale_;
+  scale2 += weight * (scale2_sample(0.5 * e.head<2>().squaredNorm(), translation_model, translation_measured, scale2,
+                                    config_) - scale2);
+  translation_scale_ = std::sqrt(scale2);
+  const double rotation_model = std::pow(sigma_rotation(increment), 2);
+  scale2 = rotation_scale_ * rotation_scale_;
+  scale2 += weight * (scale2_sample(e.z() * e.z(), rotation_model, measured_covariance(2, 2), scale2, config_) - scale2);
+  rotation_scale_ = std::sqrt(scale2);
+}
+
+FusedMotion fuse_motion(const MotionMeasurement& odometry, const MotionMeasurement& match, double gate_chi2) {
+  // A measurement without information leaves the other as the fused one.
+  if (unknown(match.covariance)) return {odometry.value, odometry.covariance, 0.0, FusionOutcome::kFused};
+  if (unknown(odometry.covariance)) return {match.value, match.covariance, 0.0, FusionOutcome::kFused};
+  const Eigen::Vector3d d = difference(odometry.value, match.value);
+  const Eigen::Matrix3d odometry_information = information_from_covariance(odometry.covariance);
+  const Eigen::Matrix3d match_information = information_from_covariance(match.covariance);
+  const double mahalanobis2 = d.dot((odometry.covariance + match.covariance).ldlt().solve(d));
+  if (!(mahalanobis2 <= gate_chi2)) {  // they disagree: the one surer along the difference wins
+    const bool odometry_surer = d.dot(odometry_information * d) > d.dot(match_information * d);
+    if (odometry_surer) return {odometry.value, odometry.covariance, mahalanobis2, FusionOutcome::kOdometryWon};
+    return {match.value, match.covariance, mahalanobis2, FusionOutcome::kMatchWon};
+  }
+  const Eigen::Matrix3d information = odometry_information + match_information;
+  const Covariance3 covariance = make_positive_definite(information.inverse());
+  const Eigen::Vector3d fused = odometry.value.vector() + covariance * match_information * d;
+  return {SE2(fused.x(), fused.y(), fused.z()), covariance, mahalanobis2, FusionOutcome::kFused};
+}
+
+void MotionFusionStats::count(FusionOutcome outcome) {
+  switch (outcome) {
+    case FusionOutcome::kFused: ++fused; break;
+    case FusionOutcome::kOdometryWon: ++odometry_won; break;
+    case FusionOutcome::kMatchWon: ++match_won; break;
+  }
+}
+
+}  // namespace slam2d

@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// One motion measured twice: the wheel odometry's increment and a scan match, each with its own
+// covariance, fused by their information (the product of two Gaussians), after a consistency test.
+//
+// - The odometry's covariance comes from a motion noise model of distance and turn (the form of
+//   Thrun, Burgard and Fox, "Probabilistic Robotics", Sec. 5.4, with standard deviations growing
+//   linearly rather than variances): an increment of length d that turns by a has
+//     sigma_translation = rest_translation + translation_per_metre d + translation_per_radian |a|,
+//     sigma_rotation    = rest_rotation + rotation_per_metre d + rotation_per_radian |a|,
+//   each times a scale the model estimates online from how well the odometry agrees with matches
+//   it is fused with: the mean of (residual^2 - the match's variance) / the model's variance over
+//   the last `window` agreements, each sample clipped at the gate (so one wrong match cannot blow
+//   the model up) and the scale kept within [min_scale, max_scale].
+// - The match's covariance is the matcher's own (Censi 2007 or the Gauss-Newton Hessian), floored
+//   (no matcher is better than its map's cell or its sensor) and inflated along its weak direction
+//   when it is degenerate (a corridor's axis): see registration/match_fusion.hpp.
+// - Consistency (Mahalanobis): the squared distance of the two under the sum of their covariances
+//   against a chi-square gate (3 degrees of freedom). Within it, the information-weighted mean.
+//   Beyond it they disagree, and the better-conditioned one along the disagreement wins alone: the
+//   one whose variance along the difference is smaller (the larger Mahalanobis distance of the
+//   difference under its own covariance). The caller counts the disagreements and their winners.
+//
+// Increments are small (scan to scan, keyframe to scan): they are fused in their coordinates
+// (x, y, theta), the heading's difference wrapped.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "slam2d/core/config_fields.hpp"
+#include "slam2d/core/covariance.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct OdometryNoiseConfig {
+  double rest_translation = 0.005;       // m
+  double rest_rotation = 0.005;          // rad
+  double translation_per_metre = 0.05;   // m per m travelled
+  double translation_per_radian = 0.02;  // m per rad turned
+  double rotation_per_metre = 0.05;      // rad per m travelled
+  double rotation_per_radian = 0.05;     // rad per rad turned
+  double window = 100.0;                 // agreements the online scale averages over (0: a fixed model)
+  double min_scale = 0.2;                // 1, the scale's bounds
+  double max_scale = 20.0;
+};
+
+template <typename Fields>
+void describe(Fields& f, OdometryNoiseConfig& c) {
+  f.number("rest_translation", c.rest_translation, "m", greater_than(0), "translation sigma of an increment that did not move");
+  f.number("rest_rotation", c.rest_rotation, "rad", greater_than(0), "rotation sigma of an increment that did not move");
+  f.number("translation_per_metre", c.translation_per_metre, "m per m", at_least(0), "growth of the translation sigma with distance");
+  f.number("translation_per_radian", c.translation_per_radian, "m per rad", at_least(0), "... with the angle turned");
+  f.number("rotation_per_metre", c.rotation_per_metre, "rad per m", at_least(0), "growth of the rotation sigma with distance");
+  f.number("rotation_per_radian", c.rotation_per_radian, "rad per rad", at_least(0), "... with the angle turned");
+  f.number("window", c.window, "1", at_least(0), "agreements the online scale of the sigmas averages over (0: fixed)");
+  f.number("min_scale", c.min_scale, "1", greater_than(0), "lower bound of the online scale (<= 1)");
+  f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound of the online scale");
+}
+
+/// Throws Error for out-of-range values.
+void validate(const OdometryNoiseConfig& config);
+
+/// The odometry's motion noise with its online scales (translation and rotation).
+class OdometryNoiseModel {
+ public:
+  explicit OdometryNoiseModel(const OdometryNoiseConfig& config = {});
+
+  /// The covariance of the odometry increment (diagonal in the increment's start frame).
+  Covariance3 covariance(const SE2& increment) const;
+
+  /// Learns from one agreement: the odometry's increment against the same motion measured by a
+  /// scan match (with its covariance). Call it only with matches the caller accepted.
+  void observe(const SE2& increment, const SE2& measured, const Covariance3& measured_covariance);
+
+  double translation_scale() const { return translation_scale_; }
+  double rotation_scale() const { return rotation_scale_; }
+  std::size_t observations() const { return observations_; }
+  const OdometryNoiseConfig& config() const { return config_; }
+
+ private:
+  double sigma_translation(const SE2& increment) const;  // unscaled
+  double sigma_rotation(const SE2& increment) const;
+
+  OdometryNoiseConfig config_;
+  double translation_scale_ = 1.0;
+  double rotation_scale_ = 1.0;
+  std::size_t observations_ = 0;
+};
+
+/// A measured increment T_a_b with its covariance (in frame a's coordinates x, y, theta).
+struct MotionMeasurement {
+  SE2 value;
+  Covariance3 covariance = unknown_covariance();
+};
+
+/// Which measurement a fusion kept.
+enum class FusionOutcome : std::uint8_t {
+  kFused,        // consistent: the information-weighted mean
+  kOdometryWon,  // they disagree beyond the gate; the odometry is better conditioned along the difference
+  kMatchWon,     // they disagree; the match is
+};
+
+struct FusedMotion {
+  SE2 value;
+  Covariance3 covariance = unknown_covariance();
+  double mahalanobis2 = 0.0;  // squared distance of the two under the sum of their covariances
+  FusionOutcome outcome = FusionOutcome::kFused;
+};
+
+/// The chi-square gate with 3 degrees of freedom at 99.9 %.
+inline constexpr double kMotionGateChi2 = 16.27;
+
+/// Fuses the two measurements of one motion (header). A measurement with unknown covariance
+/// (kUnknownVariance on the diagonal) carries no information: the other is returned.
+FusedMotion fuse_motion(const MotionMeasurement& odometry, const MotionMeasurement& match,
+                        double gate_chi2 = kMotionGateChi2);
+
+/// Counts of a run's fusions, for summaries.
+struct MotionFusionStats {
+  std::size_t fused = 0;
+  std::size_t odometry_won = 0;  // disagreements the odometry won
+  std::size_t match_won = 0;     // disagreements the match won
+  void count(FusionOutcome outcome);
+  std::size_t disagreements() const { return odometry_won + match_won; }
+};
+
+}  // namespace slam2d

@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Odometry and scan match as two measurements of one motion (core/motion_fusion.hpp): the fused
+// value is the product of the two Gaussians, a disagreement is won by the measurement surer along
+// it, and the odometry's noise model learns its scale from the agreements.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <numbers>
+
+#include "slam2d/core/error.hpp"
+#include "slam2d/core/motion_fusion.hpp"
+#include "slam2d/core/rng.hpp"
+
+namespace slam2d {
+namespace {
+
+Covariance3 random_covariance(Rng& rng, double scale) {
+  Eigen::Matrix3d a;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) a(r, c) = rng.gaussian(0.0, scale);
+  }
+  return a * a.transpose() + scale * scale * 0.1 * Eigen::Matrix3d::Identity();
+}
+
+// The product of two Gaussians in the moment form: x = a + A (A + B)^-1 (b - a), P = A - A (A + B)^-1 A.
+TEST(MotionFusion, ConsistentMeasurementsGiveTheProductOfTheirGaussians) {
+  Rng rng(7);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Covariance3 A = random_covariance(rng, 0.05);
+    const Covariance3 B = random_covariance(rng, 0.05);
+    const SE2 a(rng.gaussian(0.0, 1.0), rng.gaussian(0.0, 1.0), rng.gaussian(0.0, 1.0));
+    const Eigen::Vector3d offset(rng.gaussian(0.0, 0.01), rng.gaussian(0.0, 0.01), rng.gaussian(0.0, 0.01));
+    const SE2 b = SE2::from_vector(a.vector() + offset);
+    const FusedMotion fused = fuse_motion({a, A}, {b, B});
+    ASSERT_EQ(fused.outcome, FusionOutcome::kFused) << trial;
+    const Eigen::Matrix3d gain = A * (A + B).inverse();
+    const Eigen::Vector3d expected = a.vector() + gain * offset;
+    const Covariance3 expected_covariance = A - gain * A;
+    EXPECT_TRUE(fused.value.is_approx(SE2::from_vector(expected), 1e-9)) << trial;
+    EXPECT_LT((fused.covariance - expected_covariance).norm(), 1e-9 * expected_covariance.norm() + 1e-15) << trial;
+    EXPECT_NEAR(fused.mahalanobis2, offset.dot((A + B).inverse() * offset), 1e-9);
+  }
+}
+
+// A corridor: the match knows y and the heading, not x; the odometry knows x roughly.
+TEST(MotionFusion, ADegenerateMatchLeavesItsWeakDirectionToTheOdometry) {
+  const MotionMeasurement odometry{SE2(1.0, 0.05, 0.0), covariance_from_sigmas(0.05, 0.05, 0.02)};
+  const MotionMeasurement match{SE2(1.3, 0.0, 0.01), covariance_from_sigmas(10.0, 0.002, 0.001)};
+  const FusedMotion fused = fuse_motion(odometry, match);
+  EXPECT_EQ(fused.outcome, FusionOutcome::kFused);
+  EXPECT_NEAR(fused.value.x(), 1.0, 0.001);
+  EXPECT_NEAR(fused.value.y(), 0.0, 0.001);
+  EXPECT_NEAR(fused.value.theta(), 0.01, 0.001);
+}
+
+TEST(MotionFusion, ADisagreementIsWonByTheMeasurementSurerAlongIt) {
+  MotionFusionStats stats;
+  // A match 1 m off the odometry along x, which the match is sure of and the odometry is not.
+  const MotionMeasurement loose_odometry{SE2(1.0, 0.0, 0.0), covariance_from_sigmas(0.1, 0.1, 0.05)};
+  const MotionMeasurement sure_match{SE2(2.0, 0.0, 0.0), covariance_from_sigmas(0.01, 0.01, 0.01)};
+  const FusedMotion match_wins = fuse_motion(loose_odometry, sure_match);
+  EXPECT_EQ(match_wins.outcome, FusionOutcome::kMatchWon);
+  EXPECT_EQ(match_wins.value, sure_match.value);
+  EXPECT_GT(match_wins.mahalanobis2, kMotionGateChi2);
+  stats.count(match_wins.outcome);
+  // The same difference along the match's weak direction: the odometry wins.
+  const MotionMeasurement sure_odometry{SE2(1.0, 0.0, 0.0), covariance_from_sigmas(0.01, 0.01, 0.01)};
+  const MotionMeasurement loose_match{SE2(2.0, 0.0, 0.0), covariance_from_sigmas(0.1, 0.001, 0.001)};
+  const FusedMotion odometry_wins = fuse_motion(sure_odometry, loose_match);
+  EXPECT_EQ(odometry_wins.outcome, FusionOutcome::kOdometryWon);
+  EXPECT_EQ(odometry_wins.value, sure_odometry.value);
+  stats.count(odometry_wins.outcome);
+  stats.count(FusionOutcome::kFused);
+  EXPECT_EQ(stats.disagreements(), 2u);
+  EXPECT_EQ(stats.fused, 1u);
+}
+
+TEST(MotionFusion, AMeasurementWithoutInformationLeavesTheOther) {
+  const MotionMeasurement odometry{SE2(1.0, 0.0, 0.1), covariance_from_sigmas(0.1, 0.1, 0.05)};
+  const MotionMeasurement failed{SE2(5.0, 5.0, 1.0), unknown_covariance()};
+  EXPECT_EQ(fuse_motion(odometry, failed).value, odometry.value);
+  EXPECT_EQ(fuse_motion(failed, odometry).value, odometry.value);
+}
+
+TEST(MotionFusion, HeadingsAcrossPiAreFusedTheShortWay) {
+  const double near_pi = std::numbers::pi - 0.01;
+  const MotionMeasurement odometry{SE2(0.0, 0.0, near_pi), covariance_from_sigmas(0.1, 0.1, 0.05)};
+  const MotionMeasurement match{SE2(0.0, 0.0, -near_pi), covariance_from_sigmas(0.1, 0.1, 0.05)};
+  const FusedMotion fused = fuse_motion(odometry, match);
+  EXPECT_EQ(fused.outcome, FusionOutcome::kFused);
+  EXPECT_GT(std::abs(fused.value.theta()), std::numbers::pi - 1e-6);
+}
+
+TEST(OdometryNoiseModel, SigmasGrowWithDistanceAndTurn) {
+  const OdometryNoiseModel model(OdometryNoiseConfig{.rest_translation = 0.01, .rest_rotation = 0.02,
+                                                     .translation_per_metre = 0.1, .translation_per_radian = 0.05,
+                                                     .rotation_per_metre = 0.03, .rotation_per_radian = 0.2});
+  const Covariance3 at_rest = model.covariance(SE2());
+  EXPECT_NEAR(std::sqrt(at_rest(0, 0)), 0.01, 1e-12);
+  EXPECT_NEAR(std::sqrt(at_rest(2, 2)), 0.02, 1e-12);
+  const Covariance3 moving = model.covariance(SE2(2.0, 0.0, 0.5));
+  EXPECT_NEAR(std::sqrt(moving(0, 0)), 0.01 + 0.2 + 0.025, 1e-12);
+  EXPECT_NEAR(std::sqrt(moving(1, 1)), 0.01 + 0.2 + 0.025, 1e-12);
+  EXPECT_NEAR(std::sqrt(moving(2, 2)), 0.02 + 0.06 + 0.1, 1e-12);
+}
+
+// Odometry whose true noise is three times the model's (in translation) and half (in rotation),
+// against matches with their own small noise, 5 % of them wrong by a metre: the scales are learnt.
+TEST(OdometryNoiseModel, LearnsItsScaleFromAgreementsDespiteWrongMatches) {
+  const OdometryNoiseConfig config{.window = 200.0};
+  OdometryNoiseModel model(config);
+  const OdometryNoiseModel reference(OdometryNoiseConfig{.window = 0.0});
+  Rng rng(3);
+  const Covariance3 match_covariance = covariance_from_sigmas(0.002, 0.002, 0.001);
+  for (int k = 0; k < 3000; ++k) {
+    const SE2 truth(0.1 + 0.05 * rng.uniform(), 0.0, 0.1 * rng.gaussian(0.0, 1.0));
+    const Covariance3 model_covariance = reference.covariance(truth);
+    const double st = 3.0 * std::sqrt(model_covariance(0, 0));
+    const double sr = 0.5 * std::sqrt(model_covariance(2, 2));
+    const SE2 odometry(truth.x() + rng.gaussian(0.0, st), truth.y() + rng.gaussian(0.0, st), truth.theta() + rng.gaussian(0.0, sr));
+    SE2 match(truth.x() + rng.gaussian(0.0, 0.002), truth.y() + rng.gaussian(0.0, 0.002), truth.theta() + rng.gaussian(0.0, 0.001));
+    if (rng.uniform() < 0.05) match = match * SE2(1.0, 0.0, 0.3);
+    model.observe(odometry, match, match_covariance);
+  }
+  EXPECT_NEAR(model.translation_scale(), 3.0, 0.45);
+  EXPECT_NEAR(model.rotation_scale(), 0.5, 0.1);
+  EXPECT_EQ(model.observations(), 3000u);
+  // A fixed model (window 0) learns nothing.
+  OdometryNoiseModel fixed(OdometryNoiseConfig{.window = 0.0});
+  fixed.observe(SE2(1.0, 0.0, 0.0), SE2(2.0, 0.0, 0.0), match_covariance);
+  EXPECT_EQ(fixed.translation_scale(), 1.0);
+}
+
+TEST(OdometryNoiseModel, RejectsAnInvalidConfig) {
+  EXPECT_THROW(OdometryNoiseModel(OdometryNoiseConfig{.rest_translation = 0.0}), Error);
+  EXPECT_THROW(OdometryNoiseModel(OdometryNoiseConfig{.min_scale = 2.0}), Error);
+  EXPECT_THROW(OdometryNoiseModel(OdometryNoiseConfig{.max_scale = 0.5}), Error);
+}
+
+}  // namespace
+}  // namespace slam2d
