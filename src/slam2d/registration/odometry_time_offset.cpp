@@ -69,10 +69,17 @@ std::vector<std::size_t> window_starts(std::size_t scan_count, std::size_t strid
   return starts;
 }
 
-// The scan's points in its sensor frame, readings beyond max_range dropped.
-PointCloud2 usable_cloud(const LaserScan& scan, double max_range) {
+// The scan's points in its sensor frame, readings beyond max_range dropped, every k-th beam kept
+// so that at most max_points remain (beam order kept, for PL-ICP's projective search).
+PointCloud2 usable_cloud(const LaserScan& scan, const OdometryTimeOffsetConfig& config) {
   PointCloud2 cloud = to_point_cloud(scan, ScanFrame::kSensor).cloud;
-  std::erase_if(cloud.points, [&](const Point2& p) { return !(p.norm() < max_range); });
+  std::erase_if(cloud.points, [&](const Point2& p) { return !(p.norm() < config.max_range); });
+  const std::size_t k = (cloud.size() + config.max_points - 1) / config.max_points;
+  if (k > 1) {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < cloud.size(); i += k) cloud.points[kept++] = cloud.points[i];
+    cloud.points.resize(kept);
+  }
   return cloud;
 }
 
@@ -94,11 +101,11 @@ void match_window(const std::vector<SensorMessage>& messages, const std::vector<
     return std::get<LaserMessage>(messages[chain[scans[i]].message]).scan;
   };
   std::optional<SE2> velocity;  // the last accepted motion per second, in the sensor frame
-  PointCloud2 target = usable_cloud(scan_at(start), config.max_range);
+  PointCloud2 target = usable_cloud(scan_at(start), config);
   for (std::size_t p = 0; p < config.window_pairs; ++p) {
     const std::size_t a = start + p * stride, b = a + stride;
     if (b >= scans.size()) break;
-    PointCloud2 source = usable_cloud(scan_at(b), config.max_range);
+    PointCloud2 source = usable_cloud(scan_at(b), config);
     const double dt = chain[scans[b]].stamp - chain[scans[a]].stamp;
     std::optional<SE2> match;
     if (dt > 0.0 && dt <= config.max_pair_dt) {
@@ -186,9 +193,11 @@ double jackknife_error(const CostCurves& curves) {
   return std::sqrt((n - 1.0) / n * spread);
 }
 
+// The cost at the grid's offset nearest to `offset`.
 double cost_at(const CostCurves& curves, const std::vector<double>& cost, double offset) {
-  const auto k = std::lower_bound(curves.offsets.begin(), curves.offsets.end(), offset - 1e-12) - curves.offsets.begin();
-  return cost[std::min<std::size_t>(static_cast<std::size_t>(k), cost.size() - 1)];
+  const auto nearest = std::min_element(curves.offsets.begin(), curves.offsets.end(),
+                                        [&](double a, double b) { return std::abs(a - offset) < std::abs(b - offset); });
+  return cost[static_cast<std::size_t>(nearest - curves.offsets.begin())];
 }
 
 OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
@@ -207,6 +216,11 @@ OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const Od
   std::vector<HeadingPair> pairs;
   for (std::size_t w = 0; w < starts.size(); ++w) match_window(messages, chain, scans, starts[w], stride, w % groups, config, pairs);
   result.pairs = pairs.size();
+  if (result.pairs < config.min_turning_pairs) {
+    result.reason = "too few scan pairs matched: " + std::to_string(result.pairs) + " (scans more than " +
+                    format_number(config.max_pair_dt) + " s apart are not paired)";
+    return result;
+  }
   for (const HeadingPair& pair : pairs) {
     const double dt = chain[pair.second].stamp - chain[pair.first].stamp;
     if (std::abs(pair.turn) >= config.min_turn_rate * dt) ++result.turning_pairs;

@@ -15,10 +15,10 @@
 //   1. Scan pairs (j, j + s), s scans apart so that a pair spans about pair_span seconds whatever
 //      the scanner's rate, chained into windows of window_pairs pairs; at most max_pairs pairs
 //      in windows spread evenly over the log (bounded cost: a small fraction of a mapping run).
-//   2. Each pair's heading change dtheta_j from the scans alone: PL-ICP from the window's
-//      constant-velocity guess (then from no motion, when that fails); the odometry never guides
-//      the match, so it cannot pull the estimate towards d = 0. Matches that fail the gate
-//      (convergence, inliers, residual) are dropped.
+//   2. Each pair's heading change dtheta_j from the scans alone (at most max_points points each):
+//      PL-ICP from the window's constant-velocity guess (then from no motion, when that fails);
+//      the odometry never guides the match, so it cannot pull the estimate towards d = 0.
+//      Matches that fail the gate (convergence, inliers, residual) are dropped.
 //   3. For every candidate d on a grid over [-max_offset, max_offset] the robust cost
 //        C(d) = mean_j rho(dtheta_j - [theta_odo(t_j+s - d) - theta_odo(t_j - d)]),           (1)
 //      rho(e) = log(1 + (e / residual_scale)^2) (Cauchy), theta_odo the laser chain's heading
@@ -55,6 +55,7 @@ struct OdometryTimeOffsetConfig {
   std::size_t max_pairs = 3000;
   double max_pair_dt = 1.0;
   double max_range = 30.0;
+  std::size_t max_points = 180;
   double min_inlier_fraction = 0.5;
   double max_residual = 0.05;
   double residual_scale = 0.01;
@@ -74,6 +75,7 @@ void describe(Fields& f, OdometryTimeOffsetConfig& c) {
   f.number("max_pairs", c.max_pairs, "1", at_least(1), "scan pairs matched at most, in windows spread over the log");
   f.number("max_pair_dt", c.max_pair_dt, "s", greater_than(0), "pairs farther apart in time are not matched (gaps)");
   f.number("max_range", c.max_range, "m", greater_than(0), "readings at or beyond are dropped");
+  f.number("max_points", c.max_points, "1", at_least(10), "every k-th point kept so that at most this many are matched");
   f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "gate: inliers / the source's points");
   f.number("max_residual", c.max_residual, "m", greater_than(0), "gate: the match's RMS point-to-line residual");
   f.number("residual_scale", c.residual_scale, "rad", greater_than(0), "scale of the Cauchy cost on heading residuals, Eq. (1)");
