@@ -5,7 +5,9 @@
 // degrees and --range-max in metres on the command line, radians and metres in CarmenReaderOptions,
 // which beat the log's PARAM lines and the CARMEN convention (docs/sensor_geometry.md); and
 // --raw-odometry, which turns off the repair of odometry that integrates reversing as forward
-// driving (docs/odometry_guard.md). Also what the reader decided, for the summaries.
+// driving (docs/odometry_guard.md). Also what the reader decided, for the summaries; and
+// --odometry-time-offset (map, odometry): the odometry's time offset against the laser, estimated
+// or given, which the reader then compensates (docs/time_offset.md).
 
 #include <CLI/CLI.hpp>
 
