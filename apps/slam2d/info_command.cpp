@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // slam2d info FILE: what a CARMEN log, a map (YAML) or a pose graph (g2o/TORO) holds. For a log,
 // the FLASER/RLASER geometry the reader decided, per laser and beam count, with where each value
-// came from (docs/sensor_geometry.md).
+// came from (docs/sensor_geometry.md), and the odometry's time offset against the laser that map
+// and odometry would compensate by default (docs/time_offset.md).
 
 #include <fmt/core.h>
 
@@ -91,7 +92,9 @@ JsonObject log_info(const InfoOptions& options) {
   std::size_t scans = 0;
   double fov = 0.0, largest_reading = 0.0, range_max = 0.0;
   std::optional<double> first_scan, last_scan;
+  std::vector<SensorMessage> messages;  // for the odometry time offset
   while (auto message = reader.next()) {
+    messages.push_back(*message);
     if (const auto* laser = std::get_if<LaserMessage>(&*message)) {
       ++scans;
       ++beam_counts[laser->scan.size()];
@@ -127,6 +130,7 @@ JsonObject log_info(const InfoOptions& options) {
   for (const auto& [type, count] : stats.skipped_types) skipped.add(type, count);
   json.add("skipped_types", skipped);
   json.add("geometry", geometries_json(stats.old_laser_geometries));
+  json.merge(odometry_time_offset_json(estimate_odometry_time_offset_choice(messages)));
   return json;
 }
 
@@ -139,7 +143,9 @@ JsonObject bag_info(const InfoOptions& options) {
   std::size_t scans = 0, odometry = 0, without_pose = 0;
   double fov = 0.0;
   std::optional<double> first_scan, last_scan;
+  std::vector<SensorMessage> messages;  // for the odometry time offset
   while (auto message = reader.next()) {
+    messages.push_back(*message);
     if (const auto* laser = std::get_if<LaserMessage>(&*message)) {
       ++scans;
       ++beam_counts[laser->scan.size()];
@@ -183,6 +189,7 @@ JsonObject bag_info(const InfoOptions& options) {
   json.add("fov_deg", rad_to_deg(fov)).add("duration_s", duration);
   json.add("rate_hz", duration > 0.0 ? std::optional<double>((scans - 1) / duration) : std::nullopt);
   json.add("odom_messages", odometry).add("scans_without_odometry", without_pose);
+  json.merge(odometry_time_offset_json(estimate_odometry_time_offset_choice(messages)));
   json.add("warnings", bag.warnings());
   return json;
 }

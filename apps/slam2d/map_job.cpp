@@ -430,7 +430,11 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   const std::optional<Trajectory> reference =
       options.reference.empty() ? std::nullopt : std::optional<Trajectory>(read_any_trajectory(options.reference));
   const RunClock clock;
-  MappingRun run = run_method(options);
+  MapJobOptions resolved = options;  // with the odometry time offset the reader compensates
+  const bool log_odometry = odometry_source_of(options, options.method) == "log" && !options.method.starts_with("hector+");
+  const OdometryTimeOffsetChoice time_offset = resolve_odometry_time_offset(
+      options.log, log_odometry ? options.odometry_time_offset : "off", resolved.input, options.quiet);
+  MappingRun run = run_method(resolved);
   const double cpu = clock.cpu_seconds();
   const double wall = clock.wall_seconds();
 
@@ -444,10 +448,11 @@ MapJobResult run_map_job(const MapJobOptions& options) {
   summary.add("resolution", run.resolution).add("map_width", run.map.width).add("map_height", run.map.height);
   summary.add("backwards_timestamps", run.backwards_timestamps).add("skipped_lines", run.skipped_lines);
   summary.add("odometry_steps_reversed", run.odometry_steps_reversed);
+  summary.merge(odometry_time_offset_json(time_offset));
   summary.add("peak_rss_mb", peak_rss_mb());
   const std::vector<SE2> drawn_reference = reference ? reference_in_map(*reference, run.trajectory, run.warnings) : std::vector<SE2>();
   summary.add("warnings", run.warnings);
-  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, false, run.map, run.trajectory);
+  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, resolved.input, false, run.map, run.trajectory);
   if (options.trajectory_frame == "sensor") {  // the laser's pose: what a benchmark's relations may describe
     const auto to_sensor = [&](Trajectory& trajectory) {
       Trajectory sensor;

@@ -28,6 +28,9 @@ struct MapJobOptions {
   // trajectory on the laser alone, its jumps smoothed), or a trajectory file's path.
   std::string odometry_source = "log";
   bool no_odometry = false;          // the same as odometry_source "none"
+  // How far the log's odometry runs ahead of the laser: "auto" (estimated, compensated when
+  // confident and significant), "off", or seconds (sensor_options.hpp). Only for odometry_source "log".
+  std::string odometry_time_offset = "auto";
   std::optional<double> scan_rate;   // Hz: the method sees at most one scan per 1/rate s (the time-based subset)
   // Overrides of the method's config (preset or defaults) when set:
   std::optional<double> resolution;      // m per cell (odometry: 0.05 when unset)

@@ -41,6 +41,7 @@ struct OdometryOptions {
   std::optional<double> keyframe_angle_deg;  // deg
   LogReaderOptions input;                      // CARMEN geometry overrides, bag topics and frames
   bool no_odometry = false;
+  std::string odometry_time_offset = "auto";  // auto | off | seconds (sensor_options.hpp)
   bool json = false;
   bool quiet = false;
 };
@@ -120,7 +121,10 @@ class CovarianceRecord {
 void run_odometry(const OdometryOptions& options) {
   ScanOdometry odometry(configured_matcher(options), odometry_config(options));
   const RunClock clock;
-  LogReader reader(options.log, options.input);
+  LogReaderOptions input = options.input;
+  const OdometryTimeOffsetChoice time_offset = resolve_odometry_time_offset(
+      options.log, options.no_odometry ? "off" : options.odometry_time_offset, input, options.quiet);
+  LogReader reader(options.log, input);
   Progress progress("odometry", options.quiet);
   CovarianceRecord covariance(!options.covariance_csv.empty());
   while (auto message = reader.next()) {
@@ -154,6 +158,7 @@ void run_odometry(const OdometryOptions& options) {
   summary.add("data_duration_s", duration).add("realtime_factor", cpu > 0.0 ? std::optional<double>(duration / cpu) : std::nullopt);
   summary.add("odometry_guess", !options.no_odometry).add("trajectory", options.out);
   summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
+  summary.merge(odometry_time_offset_json(time_offset));
   if (!options.covariance_csv.empty()) summary.merge(covariance.summary(options.covariance_csv));
   std::vector<std::string> warnings = reader_warnings(reader);
   if (!options.no_odometry) {
@@ -186,6 +191,7 @@ void add_odometry_command(CLI::App& app) {
                      "m: readings at or above are dropped (default: 30 for matching, and the reader's no-return "
                      "threshold: the log's PARAM, else 80)");
   command->add_flag("--no-odometry", options->no_odometry, "Ignore the log's odometry (guess: constant velocity)");
+  add_odometry_time_offset_option(command, options->odometry_time_offset);
   command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();

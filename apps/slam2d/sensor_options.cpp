@@ -9,7 +9,9 @@
 #include <map>
 #include <optional>
 
+#include "progress.hpp"
 #include "slam2d/core/angles.hpp"
+#include "slam2d/core/error.hpp"
 
 namespace slam2d::cli {
 
@@ -100,6 +102,63 @@ std::vector<std::string> reader_warnings(const LogReader& reader) {
 
 void print_reader_warnings(const LogReader& reader) {
   for (const std::string& warning : reader_warnings(reader)) std::fprintf(stderr, "%s\n", warning.c_str());
+}
+
+void add_odometry_time_offset_option(CLI::App* command, std::string& spec) {
+  command->add_option("--odometry-time-offset", spec,
+                      "s the odometry runs ahead of the laser (negative: behind): auto (estimated from the turns the scans "
+                      "show, compensated when confident and at least 0.25 s), off, or a number of seconds in [-10, 10] "
+                      "(docs/time_offset.md)")
+      ->check([](const std::string& text) -> std::string {
+        double value = 0.0;
+        if (text == "auto" || text == "off") return {};
+        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) && std::abs(value) <= 10.0) return {};
+        return "must be auto, off or seconds in [-10, 10], got " + text;
+      })
+      ->capture_default_str();
+}
+
+OdometryTimeOffsetChoice estimate_odometry_time_offset_choice(const std::vector<SensorMessage>& messages) {
+  OdometryTimeOffsetChoice choice{.mode = "auto", .estimate = estimate_odometry_time_offset(messages)};
+  if (choice.estimate->significant) choice.applied = choice.estimate->offset;
+  return choice;
+}
+
+OdometryTimeOffsetChoice resolve_odometry_time_offset(const std::string& log, const std::string& spec,
+                                                      LogReaderOptions& options, bool quiet) {
+  OdometryTimeOffsetChoice choice;
+  if (spec == "auto") {
+    LogReaderOptions as_logged = options;
+    as_logged.odometry_time_offset = 0.0;
+    LogReader reader(log, as_logged);
+    Progress progress("odometry time offset", quiet);
+    const std::vector<SensorMessage> messages =
+        read_all(reader, [&](double fraction, std::size_t n) { progress.update(fraction, fmt::format("{} messages read", n)); });
+    progress.finish();
+    choice = estimate_odometry_time_offset_choice(messages);
+  } else if (spec != "off") {
+    choice.mode = "given";
+    check(CLI::detail::lexical_cast(spec, choice.applied) && std::isfinite(choice.applied),
+          "--odometry-time-offset: not auto, off or a number: " + spec);
+  }
+  options.odometry_time_offset = choice.applied;
+  return choice;
+}
+
+JsonObject odometry_time_offset_json(const OdometryTimeOffsetChoice& choice) {
+  JsonObject json;
+  json.add("odometry_time_offset_s", choice.applied).add("odometry_time_offset_applied", choice.applied != 0.0);
+  json.add("odometry_time_offset_mode", choice.mode);
+  if (!choice.estimate) return json;
+  const OdometryTimeOffset& estimate = *choice.estimate;
+  json.add("odometry_time_offset_estimated", estimate.estimated);
+  json.add("odometry_time_offset_estimate_s", estimate.estimated ? std::optional<double>(estimate.offset) : std::nullopt);
+  json.add("odometry_time_offset_best_s", estimate.best);
+  json.add("odometry_time_offset_uncertainty_s",
+           std::isfinite(estimate.uncertainty) ? std::optional<double>(estimate.uncertainty) : std::nullopt);
+  json.add("odometry_time_offset_pairs", estimate.pairs).add("odometry_time_offset_turning_pairs", estimate.turning_pairs);
+  json.add("odometry_time_offset_reason", estimate.reason).add("odometry_time_offset_wall_s", estimate.seconds);
+  return json;
 }
 
 }  // namespace slam2d::cli

@@ -5,15 +5,20 @@
 // degrees and --range-max in metres on the command line, radians and metres in CarmenReaderOptions,
 // which beat the log's PARAM lines and the CARMEN convention (docs/sensor_geometry.md); and
 // --raw-odometry, which turns off the repair of odometry that integrates reversing as forward
-// driving (docs/odometry_guard.md). Also what the reader decided, for the summaries.
+// driving (docs/odometry_guard.md). Also what the reader decided, for the summaries; and
+// --odometry-time-offset (map, odometry): the odometry's time offset against the laser, estimated
+// or given, which the reader then compensates (docs/time_offset.md).
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "json.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/log_reader.hpp"
+#include "slam2d/registration/odometry_time_offset.hpp"
 
 namespace slam2d::cli {
 
@@ -38,5 +43,27 @@ void print_reader_warnings(const CarmenReader& reader);
 /// The warnings of any log: CARMEN's above, or what the bag assembly could not decide.
 std::vector<std::string> reader_warnings(const LogReader& reader);
 void print_reader_warnings(const LogReader& reader);
+
+/// What --odometry-time-offset auto|off|SECONDS decided (registration/odometry_time_offset.hpp).
+struct OdometryTimeOffsetChoice {
+  std::string mode = "off";                    // auto | off | given
+  std::optional<OdometryTimeOffset> estimate;  // auto: the estimate
+  double applied = 0.0;                        // s, the LogReaderOptions::odometry_time_offset set
+};
+
+/// Adds --odometry-time-offset (default auto) to `command`, writing the text into `spec`.
+void add_odometry_time_offset_option(CLI::App* command, std::string& spec);
+
+/// Resolves `spec` for `log`: off; SECONDS, applied as given; auto, the log read once and the
+/// offset estimated, applied when confident and significant. Sets options.odometry_time_offset.
+OdometryTimeOffsetChoice resolve_odometry_time_offset(const std::string& log, const std::string& spec,
+                                                      LogReaderOptions& options, bool quiet);
+
+/// The estimate of a log's messages, as auto would decide (for `slam2d info`).
+OdometryTimeOffsetChoice estimate_odometry_time_offset_choice(const std::vector<SensorMessage>& messages);
+
+/// The summary keys: odometry_time_offset_s (applied, 0 when none), _applied, _mode, and for auto
+/// _estimated, _estimate_s, _uncertainty_s, _reason and _wall_s.
+JsonObject odometry_time_offset_json(const OdometryTimeOffsetChoice& choice);
 
 }  // namespace slam2d::cli

@@ -69,6 +69,29 @@ TEST_F(CliTest, InfoReportsTheSimulatedLog) {
   for (const char* key : {"max_range", "skipped_lines"}) EXPECT_TRUE(json_number(result.output, key)) << key;
 }
 
+TEST_F(CliTest, InfoMapAndOdometryReportTheOdometryTimeOffset) {
+  const CommandResult info = run_command(slam2d("info --json " + log()));
+  ASSERT_EQ(info.exit_code, 0) << info.errors;
+  EXPECT_EQ(json_number(info.output, "odometry_time_offset_s"), 0.0);  // nothing to compensate in a simulated log
+  EXPECT_TRUE(json_number(info.output, "odometry_time_offset_wall_s"));
+  const TempDir dir;
+  const CommandResult given = run_command(
+      slam2d("map " + log() + " --method odometry --quiet --json --odometry-time-offset 0.5 --out " + dir.file("given")));
+  ASSERT_EQ(given.exit_code, 0) << given.errors;
+  EXPECT_EQ(json_number(given.output, "odometry_time_offset_s"), 0.5);
+  EXPECT_NE(given.output.find("\"odometry_time_offset_applied\": true"), std::string::npos) << given.output;
+  EXPECT_EQ(json_number(read_text(dir.file("given/summary.json")), "odometry_time_offset_s"), 0.5);
+  const CommandResult automatic =
+      run_command(slam2d("odometry " + log() + " --matcher icp --quiet --json --out " + dir.file("odometry.txt")));
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.errors;
+  EXPECT_EQ(json_number(automatic.output, "odometry_time_offset_s"), 0.0);
+  EXPECT_NE(automatic.output.find("\"odometry_time_offset_mode\": \"auto\""), std::string::npos) << automatic.output;
+  const CommandResult wrong =
+      run_command(slam2d("map " + log() + " --method odometry --odometry-time-offset soon --out " + dir.file("wrong")));
+  EXPECT_NE(wrong.exit_code, 0);
+  EXPECT_NE(wrong.errors.find("--odometry-time-offset"), std::string::npos) << wrong.errors;
+}
+
 TEST_F(CliTest, RangeMaxOverridesTheNoReturnThreshold) {
   // The simulator declares its 30 m maximum in a PARAM line; --range-max overrides it.
   const CommandResult declared = run_command(slam2d("info --json " + log()));

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/io/log_reader.hpp"
 
+#include <cmath>
 #include <filesystem>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry_chain.hpp"
 #include "slam2d/io/mcap.hpp"
 #include "slam2d/io/ros1_bag.hpp"
 #include "slam2d/io/rosbag2.hpp"
@@ -49,14 +51,31 @@ LogReader::LogReader(const std::string& path, LogReaderOptions options) : format
   } else {
     bag_ = std::make_unique<BagLogReader>(open_bag(format_, path), std::move(options.bag), options.carmen.geometry);
   }
+  check(std::isfinite(options.odometry_time_offset), path + ": the odometry time offset must be finite");
+  if (options.odometry_time_offset != 0.0) {
+    std::vector<SensorMessage> messages;
+    while (auto message = next_from_file()) messages.push_back(std::move(*message));
+    shift_scan_odometry(messages, -options.odometry_time_offset);
+    shifted_ = std::move(messages);
+  }
 }
 
 LogReader::~LogReader() = default;
 LogReader::LogReader(LogReader&&) noexcept = default;
 LogReader& LogReader::operator=(LogReader&&) noexcept = default;
 
-std::optional<SensorMessage> LogReader::next() { return carmen_ ? carmen_->next() : bag_->next(); }
-double LogReader::progress() const { return carmen_ ? carmen_->progress() : bag_->progress(); }
+std::optional<SensorMessage> LogReader::next_from_file() { return carmen_ ? carmen_->next() : bag_->next(); }
+
+std::optional<SensorMessage> LogReader::next() {
+  if (!shifted_) return next_from_file();
+  if (served_ == shifted_->size()) return std::nullopt;
+  return std::move((*shifted_)[served_++]);
+}
+
+double LogReader::progress() const {
+  if (shifted_) return shifted_->empty() ? 1.0 : static_cast<double>(served_) / static_cast<double>(shifted_->size());
+  return carmen_ ? carmen_->progress() : bag_->progress();
+}
 const std::string& LogReader::path() const { return carmen_ ? carmen_->path() : bag_->path(); }
 CarmenStats LogReader::stats() const { return carmen_ ? carmen_->stats() : CarmenStats{}; }
 

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,10 @@ const char* log_format_name(LogFormat format);  // "carmen", "ros1", "mcap", "ro
 struct LogReaderOptions {
   CarmenReaderOptions carmen;  // its geometry overrides apply to every format; the rest is CARMEN's
   BagSelection bag;            // bags only: topics and frames
+  // s: how far the odometry runs ahead of the laser (registration/odometry_time_offset.hpp); each
+  // scan's odometry pose becomes the laser chain's at its stamp minus this (core/odometry_chain.hpp:
+  // shift_scan_odometry). Nonzero: the log is read whole when opened. 0: as logged.
+  double odometry_time_offset = 0.0;
 };
 
 class LogReader {
@@ -52,6 +57,10 @@ class LogReader {
   LogFormat format_;
   std::unique_ptr<CarmenReader> carmen_;
   std::unique_ptr<BagLogReader> bag_;
+  // With an odometry time offset: the whole log, shifted, and how many messages were given out.
+  std::optional<std::vector<SensorMessage>> shifted_;
+  std::size_t served_ = 0;
+  std::optional<SensorMessage> next_from_file();
 };
 
 /// Every message left in `reader`; `progress(fraction, messages so far)` every 4096 messages.

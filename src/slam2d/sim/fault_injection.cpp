@@ -13,6 +13,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/number_text.hpp"
+#include "slam2d/core/odometry_chain.hpp"
 
 namespace slam2d {
 
@@ -278,29 +279,6 @@ std::optional<Chain> chain_of(const SensorMessage& message) {
   }
   if (std::holds_alternative<ImuMessage>(message)) return std::nullopt;  // no pose
   return std::holds_alternative<OdometryMessage>(message) ? kOdomChain : kLaserChain;
-}
-
-SE2 odometry_pose(const SensorMessage& message) {
-  if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->odom_pose;
-  if (const auto* odometry = std::get_if<OdometryMessage>(&message)) return odometry->reading.pose;
-  return std::get<TruePoseMessage>(message).odom_pose;
-}
-
-// Sets the odometry pose; a laser line's estimated pose follows it when it repeated it, and a
-// ROBOTLASER1's laser pose keeps its mounting on the robot.
-void set_odometry_pose(SensorMessage& message, const SE2& pose) {
-  if (auto* laser = std::get_if<LaserMessage>(&message)) {
-    if (laser->type == "ROBOTLASER1") {
-      laser->laser_pose = pose * laser->scan.T_robot_sensor;
-    } else if (laser->laser_pose == laser->odom_pose) {
-      laser->laser_pose = pose;
-    }
-    laser->odom_pose = pose;
-  } else if (auto* odometry = std::get_if<OdometryMessage>(&message)) {
-    odometry->reading.pose = pose;
-  } else {
-    std::get<TruePoseMessage>(message).odom_pose = pose;
-  }
 }
 
 // m, the length of the laser chain's odometry path in file order.
