@@ -165,7 +165,9 @@ TEST(MatchBenchCli, ErrorsAreMeasuredAgainstTheReferenceGiven) {
   const std::vector<CsvRow> stretched_rows = read_csv(dir.file("stretched_out/cases.csv"));
   const Cell honest = cell(rows, "pl-icp", kLevelNames[0]);
   const Cell misled = cell(stretched_rows, "pl-icp", kLevelNames[0]);
-  EXPECT_GT(misled.mean_trans_error, honest.mean_trans_error + 0.1);
+  // (15 % of pairs about 0.7 m apart: about 0.1 m; measured 0.100 against 0.0055)
+  EXPECT_GT(misled.mean_trans_error, honest.mean_trans_error + 0.05);
+  EXPECT_GT(misled.mean_trans_error, 5.0 * honest.mean_trans_error);
   EXPECT_LT(misled.success_rate, honest.success_rate - 0.5);
 }
 

@@ -64,6 +64,12 @@ TEST(GraphSlamRealData, ClosesTheLoopsOfAces) {
   EXPECT_EQ(error.relations, 1279u);
   EXPECT_LT(error.translation.mean, 0.042);       // m
   EXPECT_LT(error.rotation_deg.mean, 0.40);       // deg
+  // An odometry edge beside each sequential edge whose increments the guard trusted, unless the
+  // match outvoted it; mostly consistent with it; the noise model's scales stay inside their bounds.
+  EXPECT_GT(slam.stats().odometry_edges + slam.stats().fusion.match_won, 9 * (slam.stats().keyframes - 1) / 10);
+  EXPECT_GT(slam.stats().fusion.fused, 9 * slam.stats().odometry_edges / 10);
+  EXPECT_GT(slam.odometry_noise().observations(), 1000u);
+  EXPECT_LT(slam.odometry_noise().translation_scale(), slam.odometry_noise().config().max_scale);
 }
 
 // Without odometry the tracker drifts 3.6 m around ACES's second large loop; the log cut at

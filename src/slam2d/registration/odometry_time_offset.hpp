@@ -62,7 +62,7 @@ struct OdometryTimeOffsetConfig {
   double min_turn_rate = 0.3;
   std::size_t min_turning_pairs = 30;
   std::size_t jackknife_groups = 10;
-  double max_uncertainty = 0.03;
+  double max_uncertainty = 0.05;
   double min_significant_offset = 0.25;
 };
 

@@ -15,6 +15,13 @@
 
 namespace slam2d {
 
+namespace {
+
+// What a sequential edge keeps of its information when the odometry beside it outvoted it.
+constexpr double kOutvotedWeight = 1e-6;
+
+}  // namespace
+
 HectorSlamConfig default_tracking_config() {
   HectorSlamConfig config;
   config.prior_information_translation = 100.0;  // 1/m^2: sigma 0.1 m
@@ -117,7 +124,7 @@ void GraphSlam::accumulate_odometry(const HectorStep& tracked) {
 Covariance3 GraphSlam::sequential_covariance(const HectorStep& tracked) const {
   const double floor = config_.sequential_sigma_translation;
   const Covariance3 fixed = covariance_from_sigmas(floor, floor, config_.sequential_sigma_rotation);
-  if (!config_.sequential_from_match || !tracked.matched) return fixed;
+  if (!config_.sequential_from_match || !tracked.matched || !odometry_intact_) return fixed;
   MatchResult match = tracked.match;
   match.covariance *= 2.0;
   const MatchNoiseConfig noise{.floor_translation = floor,
@@ -129,10 +136,16 @@ Covariance3 GraphSlam::sequential_covariance(const HectorStep& tracked) const {
 
 // The odometry edge beside a sequential edge: the guarded odometry's increment between the two
 // keyframes with the motion noise model's covariance; the two edges' agreement teaches the model.
-void GraphSlam::add_odometry_edge(const PoseGraphEdge& sequential) {
+// Where they disagree beyond the gate, the one surer along the difference stands alone: the
+// odometry edge is left out, or the sequential edge keeps next to no information.
+void GraphSlam::add_odometry_edge(PoseGraphEdge& sequential) {
   const Covariance3 covariance = odometry_noise_.covariance(odometry_since_keyframe_);
   const Covariance3 sequential_covariance = sequential.information.inverse();
-  stats_.fusion.count(fuse_motion({odometry_since_keyframe_, covariance}, {sequential.T_from_to, sequential_covariance}).outcome);
+  const FusionOutcome outcome =
+      fuse_motion({odometry_since_keyframe_, covariance}, {sequential.T_from_to, sequential_covariance}).outcome;
+  stats_.fusion.count(outcome);
+  if (outcome == FusionOutcome::kMatchWon) return;
+  if (outcome == FusionOutcome::kOdometryWon) sequential.information *= kOutvotedWeight;
   PoseGraphEdge edge = sequential;
   edge.T_from_to = odometry_since_keyframe_;
   edge.information = information_from_covariance(covariance);
@@ -158,10 +171,10 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
     edge.to = static_cast<int>(keyframe.node);
     edge.T_from_to = T_map_previous.between(estimate);
     edge.information = information_from_covariance(sequential_covariance(tracked));
+    if (config_.odometry_edges && odometry_intact_) add_odometry_edge(edge);
     graph_.edges.push_back(edge);
     keyframe_motion_.push_back(edge.T_from_to);
     if (!matched) ++stats_.sequential_failures;
-    if (config_.odometry_edges && odometry_intact_) add_odometry_edge(edge);
   }
   odometry_since_keyframe_ = SE2();
   odometry_intact_ = tracker_ && tracker_->config().prior == MotionPrior::kOdometry;

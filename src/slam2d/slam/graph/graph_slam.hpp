@@ -9,16 +9,19 @@
 //    the last keyframe, or min_time passed (keyframes.hpp);
 // 2. sequential constraints: every scan is tracked against a local occupancy-grid map by
 //    Gauss-Newton on a map pyramid (Hector's matcher, slam/hector, with a weak prior at the
-//    odometry prediction); the tracked motion from the previous keyframe is the edge. Its
-//    covariance is the match's at the new keyframe (registration/match_fusion.hpp: the Hessian's,
-//    twice, for the two ends matched against one local map), with a small floor (a scan-to-map
-//    match does not drift from keyframe to keyframe as scan-to-scan matches do, so where the scan
-//    sees every direction the chain is stiff and the loop edges bend it only where it drifted);
-//    where the scan leaves a direction open, the edge is loose along it. Beside it, when the scans
+//    odometry prediction); the tracked motion from the previous keyframe is the edge, with a small
+//    fixed covariance (a scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
+//    matches do, so the chain is stiff and the loop edges bend it only where it drifted); with
+//    `sequential_from_match`, the match's covariance at the new keyframe is added
+//    (registration/match_fusion.hpp: the Hessian's, twice, for the two ends matched against one
+//    local map), so that where the scan leaves a direction open the edge is loose along it. Beside it, when the scans
 //    come with odometry, an odometry edge: the guarded odometry's increment between the two
 //    keyframes, with the covariance of the odometry's motion noise model (core/motion_fusion.hpp),
 //    whose scale is learnt from how well the two edges agree; the back end weighs the two by their
-//    information. An increment the odometry guard did not trust leaves that odometry edge out;
+//    information. Where the two disagree beyond their joint uncertainty (core/motion_fusion.hpp),
+//    the one surer along the difference stands alone. An increment the odometry guard did not
+//    trust leaves that odometry edge out, and without odometry the sequential edge keeps the
+//    fixed covariance of the floor;
 // 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
 //    local map searched over a large window by branch-and-bound, accepted above a response
 //    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
@@ -75,7 +78,9 @@ struct GraphSlamConfig {
   double sequential_sigma_translation = 0.002;  // the sequential edge's floor
   double sequential_sigma_rotation = 0.001;
   // The tracker's match covariance on top of the floor (false: the floor alone, a fixed covariance).
-  bool sequential_from_match = true;
+  // Off by default: it helps under laser faults but costs ACES with 10 s odometry stalls
+  // (docs/fusion_by_uncertainty.md).
+  bool sequential_from_match = false;
   double degenerate_sigma = 1.0;  // m (rad) added along a degenerate match's weak direction
   bool odometry_edges = true;
   OdometryNoiseConfig odometry_noise{};
@@ -176,7 +181,7 @@ class GraphSlam {
   void add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked, bool matched);
   Covariance3 sequential_covariance(const HectorStep& tracked) const;
   void accumulate_odometry(const HectorStep& tracked);
-  void add_odometry_edge(const PoseGraphEdge& sequential);
+  void add_odometry_edge(PoseGraphEdge& sequential);
   int close_loops(std::size_t current, bool final);
   int add_closures(const std::vector<LoopClosure>& closures, bool final);
   bool lifelong() const { return config_.keyframes.redundant_radius > 0.0; }
