@@ -26,7 +26,7 @@ import json
 import os
 import sys
 
-from common import CommandFailed, run, run_measured, write_atomic
+from common import run, run_measured, write_atomic
 
 LOGS = ["intel", "fr079"]
 METHODS = ["odometry", "hector", "graph", "graph-keep-all", "rbpf", "hector+graph", "mcl", "ekf"]
