@@ -80,9 +80,8 @@ bool ScanOdometry::passes_gate(const MatchResult& match, const SE2& guess, std::
 // The motion from the keyframe measured twice, by the trusted odometry and by the accepted match
 // (moved into the robots' frames with its covariance), fused (core/motion_fusion.hpp); the
 // agreement teaches the odometry's noise model its scale.
-SE2 ScanOdometry::fuse_with_odometry(const SE2& odometry, const SE2& T_keyframe_robot, const SE2& T_robot_sensor) {
-  MatchResult moved = match_between_robots(last_match_, keyframe_->T_robot_sensor, T_robot_sensor);
-  moved.T_target_source = T_keyframe_robot;
+SE2 ScanOdometry::fuse_with_odometry(const SE2& odometry, const SE2& T_robot_sensor) {
+  const MatchResult moved = match_between_robots(last_match_, keyframe_->T_robot_sensor, T_robot_sensor);
   const MotionMeasurement match = match_measurement(moved, config_.match_noise);
   const FusedMotion fused =
       fuse_motion({odometry, odometry_noise_.covariance(odometry)}, match, config_.fusion_gate);
@@ -146,7 +145,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
       T_keyframe_robot = keyframe_->T_robot_sensor * last_match_.T_target_source * scan.T_robot_sensor.inverse();
       const bool odometry_guess = guarded && keyframe_->odom_pose;
       if (odometry_guess && config_.fuse_odometry) {
-        T_keyframe_robot = fuse_with_odometry(guess, T_keyframe_robot, scan.T_robot_sensor);
+        T_keyframe_robot = fuse_with_odometry(guess, scan.T_robot_sensor);
       }
     }
   }

@@ -145,7 +145,7 @@ class ScanOdometry {
   PointCloud2 usable_cloud(const LaserScan& scan) const;
   SE2 predict(double stamp, const std::optional<SE2>& odom_pose) const;  // T_keyframe_robot
   bool passes_gate(const MatchResult& match, const SE2& guess, std::size_t points) const;
-  SE2 fuse_with_odometry(const SE2& odometry, const SE2& T_keyframe_robot, const SE2& T_robot_sensor);
+  SE2 fuse_with_odometry(const SE2& odometry, const SE2& T_robot_sensor);  // T_keyframe_robot
   void update_velocity(double stamp, const SE2& T_world_robot);
 
   Matcher matcher_;

@@ -113,7 +113,6 @@ void HectorSlam::fuse(HectorStep& step) {
   odometry_noise_.observe(odometry_.increment, last_pose_->between(match.value),
                           rotate_covariance(last_covariance_ + match.covariance, -last_pose_->theta()));
   fusion_stats_.count(fused.outcome);
-  step.fusion = fused.outcome;
   step.T_map_robot = fused.value;
   step.covariance = fused.covariance;
 }

@@ -157,7 +157,6 @@ struct HectorStep {
   bool matched = false;                          // false on the first scan (no map yet)
   bool map_updated = false;
   OdometryCheck odometry;                        // the guard's verdict (kOdometry prior only)
-  std::optional<FusionOutcome> fusion;           // how the match met the odometry's prediction, if fused
 };
 
 /// Throws Error for negative or non-finite ranges/thresholds, min_range >= max_range, or an invalid
