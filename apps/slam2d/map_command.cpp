@@ -32,6 +32,9 @@ void add_map_command(CLI::App& app) {
                       "smoothed: the 2015 pipeline), or a trajectory file (slam2d text or TUM) interpolated at each scan")
       ->capture_default_str();
   command->add_flag("--no-odometry", options->no_odometry, "The same as --odometry-source none");
+  command->add_flag("!--no-odometry-smoothing", options->odometry_smoothing,
+                    "Keep the method's per-scan poses as they are (default: smoothed with the odometry, each weighed "
+                    "by the noise the data shows; docs/fusion_by_uncertainty.md)");
   add_odometry_time_offset_option(command, options->odometry_time_offset);
   command->add_option("--scan-rate", options->scan_rate,
                       "Hz: the method sees one scan per 1/rate s (the time-based subset; a standing robot still contributes "

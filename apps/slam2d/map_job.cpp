@@ -24,6 +24,7 @@
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/fusion/discontinuity_smoothing.hpp"
+#include "slam2d/slam/fusion/odometry_smoothing.hpp"
 #include "slam2d/slam/fusion/trajectory_fusion.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
@@ -49,6 +50,7 @@ struct MappingRun {
   // sparse method's, written beside the fused one.
   std::optional<Trajectory> dense_trajectory;
   std::optional<Trajectory> sparse_trajectory;
+  std::vector<SE2> odometry;  // the odometry pose each scan of the trajectory came with, when it came with one
 };
 
 // Kaijaluoto et al. 2015's rate of the time-based subset the sparse method of a chain sees.
@@ -147,6 +149,7 @@ MappingRun run_over_scans(const MapJobOptions& options, const OdometryFeed& feed
     }
     if (run.trajectory.empty()) run.T_robot_sensor = laser->scan.T_robot_sensor;
     run.trajectory.push_back(laser->scan.stamp, add_scan(*laser, odometry));
+    if (odometry) run.odometry.push_back(*odometry);
   }
   progress.finish();
   print_reader_warnings(reader);
@@ -397,12 +400,44 @@ MappingRun run_chain(const MapJobOptions& options) {
   return run;
 }
 
+// The method's per-scan poses smoothed with the odometry they came with (slam/fusion/
+// odometry_smoothing.hpp), and what it found into the summary. Only an odometry that is a sensor
+// of its own (the log's, a trajectory file's): Hector's, the laser's, would share the method's errors.
+void smooth_with_odometry(MappingRun& run, const MapJobOptions& options) {
+  OdometrySmoothingConfig config;
+  config.enabled = options.odometry_smoothing;
+  const std::vector<SE2> method = poses_of(run.trajectory);
+  OdometrySmoothingStats stats;
+  const std::vector<SE2> smoothed = smooth_with_odometry(method, run.odometry, config, &stats);
+  if (stats.applied) {
+    Trajectory trajectory;
+    trajectory.reserve(smoothed.size());
+    for (std::size_t i = 0; i < smoothed.size(); ++i) trajectory.push_back(run.trajectory[i].stamp, smoothed[i]);
+    run.trajectory = std::move(trajectory);
+  }
+  JsonObject report;
+  report.add("applied", stats.applied);
+  if (!stats.applied) report.add("skipped", stats.skipped);
+  if (stats.applied) {
+    const auto triple = [](const Eigen::Vector3d& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
+    report.add("method_jitter_sigma", triple(stats.noise.method_jitter));
+    report.add("odometry_jitter_sigma", triple(stats.noise.odometry_jitter));
+    report.add("odometry_translation_scale", stats.noise.translation_scale);
+    report.add("odometry_rotation_scale", stats.noise.rotation_scale);
+    report.add("odometry_steps_refused", stats.steps_refused).add("poses_downweighted", stats.poses_downweighted);
+    report.add("max_change_m", stats.max_change_m);
+  }
+  run.method_summary.add("odometry_smoothing", report);
+}
+
 MappingRun run_method(const MapJobOptions& options) {
   if (options.method.starts_with("hector+")) return run_chain(options);
   std::optional<DenseHector> hector;
   const std::string source = odometry_source_of(options, options.method);
   const OdometryFeed feed = resolve_odometry_feed(options, source, hector);
   MappingRun run = run_method(options.method, options, feed);
+  const bool own_sensor = feed.kind == OdometryFeed::Kind::kLog || feed.kind == OdometryFeed::Kind::kTrajectory;
+  if (options.method != "odometry" && own_sensor) smooth_with_odometry(run, options);
   run.method_summary.add("odometry_source", source);
   if (hector) run.method_summary.add("hector_cpu_s", hector->cpu_s).add("hector_jumps_smoothed", hector->jumps);
   return run;

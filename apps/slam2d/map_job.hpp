@@ -31,6 +31,9 @@ struct MapJobOptions {
   // How far the log's odometry runs ahead of the laser: "auto" (estimated, compensated when
   // confident and significant), "off", or seconds (sensor_options.hpp). Only for odometry_source "log".
   std::string odometry_time_offset = "auto";
+  // hector, graph, rbpf given odometry (log or a trajectory file): the per-scan poses smoothed
+  // with the odometry's increments, each weighed by its own noise (slam/fusion/odometry_smoothing.hpp).
+  bool odometry_smoothing = true;
   std::optional<double> scan_rate;   // Hz: the method sees at most one scan per 1/rate s (the time-based subset)
   // Overrides of the method's config (preset or defaults) when set:
   std::optional<double> resolution;      // m per cell (odometry: 0.05 when unset)

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// A mapping method's per-scan poses smoothed with the wheel odometry they were given, each
+// weighed by a noise the data itself shows.
+//
+// Every mapping method places each scan by matching it; the odometry measures the motion between
+// two scans once more. A matched pose has an error of its own at each scan (a scan turned by its
+// scanner, a noisy or thin scan matched a little off): it does not drift, but it jitters, and on
+// relations a few seconds long the jitter of the two ends is the whole error. The odometry
+// drifts, but from one scan to the next it is smooth. So the best per-scan pose is the product of
+// both: the method's pose as an absolute measurement with the covariance R of its jitter, the
+// odometry's increment as a relative one with the covariance Q_i of its motion noise, combined by
+// a Rauch-Tung-Striebel smoother (a Kalman filter forward, its gains backward), extended to SE(2).
+//
+// Neither covariance is assumed: both are estimated from the two pose streams.
+// 1. The jitter of each (the three-cornered hat, two-sensor form: J. E. Gray and D. W. Allan, "A
+//    method for estimating the frequency stability of an individual oscillator", 1974, in the
+//    form of F. E. Grubbs, 1948). The second difference of a pose stream at scan i, in its own
+//    frame, (p_i^-1 p_{i+1}) + (p_i^-1 p_{i-1}), is the robot's change of velocity plus 6 times
+//    the stream's white variance. The robot's part is common to both streams; the two noises are
+//    independent. So per axis (x, y, theta of the robot frame), with l and o the two streams'
+//    second differences: R = (E[l^2] - E[l o]) / 6 and the odometry's own white variance
+//    W = (E[o^2] - E[l o]) / 6. A sample whose |l - o| lies beyond the 99th percentile (a match
+//    gone wrong, an odometry jump) is left out. The odometry's second differences are divided by
+//    its systematic scale first (a wheel's: the two streams' increments over 16 scans, regressed),
+//    or a scale error of a few percent would pass the robot's own accelerations off as noise.
+// 2. The odometry's drift: the disagreement of the two streams over k scans (k = 1, 2, 3, 4, 6, 8,
+//    12, 16), less the white part 2 (R + W), against the sum of the motion noise model's variances
+//    along those k increments (core/motion_fusion.hpp, unscaled): a scale s times that sum plus a
+//    quadratic term for systematic error (a wheel's scale), fitted by non-negative least squares,
+//    three times, trimming samples beyond 16 times the fit. Q_i = s q_i + 2 W.
+//    The method's own drift is indistinguishable from the odometry's there and is counted as the
+//    odometry's: it makes the smoother trust the method more, never less.
+// Then forward over the scans: the odometry's increment predicts; it is refused (the chain is cut
+// and the filter restarts at the method's pose) where it disagrees with the method's own increment
+// beyond a chi-square gate under Q_i + 2R (a jump, a stall, a slip); the method's pose updates,
+// with R inflated by m^2 / gate where its innovation's squared Mahalanobis distance m^2 is beyond
+// the gate (a Huber-like weight: a wrong match loses weight, never all of it, so that a filter
+// that has gone wrong cannot refuse every pose after). Backward: the RTS gains.
+//
+// Where the method is sure and the odometry noisy, R is near 0 and the poses stay the method's;
+// where the laser is noisy and the odometry good, the poses follow the odometry between scans and
+// the method over longer spans. The map stays the method's (it was built from its own poses).
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slam2d/core/config_fields.hpp"
+#include "slam2d/core/motion_fusion.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+struct OdometrySmoothingConfig {
+  bool enabled = true;
+  double gate_chi2 = kMotionGateChi2;  // 1, the chi-square gate of the step test and the update
+  double trim_quantile = 0.99;         // 1, the hat's samples kept by |l - o|
+  double min_scale = 0.05;             // 1, lower bound of the odometry drift's scale s
+  double max_scale = 100.0;            // 1, upper bound
+  std::size_t min_poses = 50;          // fewer: the poses are left as they are
+  OdometryNoiseConfig odometry_noise{};  // the motion noise model's form (its online scale is unused)
+};
+
+template <typename Fields>
+void describe(Fields& f, OdometrySmoothingConfig& c) {
+  f.flag("enabled", c.enabled, "smooth the method's per-scan poses with the odometry (false: the method's poses)");
+  f.number("gate_chi2", c.gate_chi2, "1", greater_than(0), "chi-square gate (3 degrees of freedom) of the step test and the update");
+  f.number("trim_quantile", c.trim_quantile, "1", between(0.5, 1), "quantile of |l - o| kept when the jitters are estimated");
+  f.number("min_scale", c.min_scale, "1", greater_than(0), "lower bound of the odometry drift's scale");
+  f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound of the odometry drift's scale");
+  f.number("min_poses", c.min_poses, "1", at_least(5), "shorter runs are left as they are");
+  f.section("odometry_noise", c.odometry_noise, "the form of the odometry's motion noise (core/motion_fusion.hpp)");
+}
+
+/// Throws Error for out-of-range values.
+void validate(const OdometrySmoothingConfig& config);
+
+/// What the data showed of the two streams (standard deviations per axis of the robot frame:
+/// x, y in m, theta in rad).
+struct PoseStreamNoise {
+  Eigen::Vector3d method_jitter = Eigen::Vector3d::Zero();    // sqrt(R)
+  Eigen::Vector3d odometry_jitter = Eigen::Vector3d::Zero();  // sqrt(W)
+  double translation_scale = 1.0;  // s of the odometry's drift, translation
+  double rotation_scale = 1.0;     // ... rotation
+};
+
+struct OdometrySmoothingStats {
+  bool applied = false;
+  std::string skipped;            // why not, when not applied
+  PoseStreamNoise noise;
+  std::size_t poses = 0;
+  std::size_t steps_refused = 0;      // odometry increments cut from the chain
+  std::size_t poses_downweighted = 0; // method poses whose weight the update reduced
+  double max_change_m = 0.0;          // the largest move of a pose
+};
+
+/// The noise of the two streams, as estimated above. `method` and `odometry` have one pose per
+/// scan, same size, at least 5 poses.
+PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                           const OdometrySmoothingConfig& config = {});
+
+/// The smoothed poses, one per scan. Returns `method` itself when smoothing is disabled, the run
+/// is shorter than min_poses or the sizes differ (stats->skipped says which).
+std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                      const OdometrySmoothingConfig& config = {},
+                                      OdometrySmoothingStats* stats = nullptr);
+
+}  // namespace slam2d

@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A method's per-scan poses smoothed with the odometry (slam/fusion/odometry_smoothing): against a
+// known path, the two streams' noises are recovered, a jittery method is brought below both its
+// own and the odometry's error on short relations, a sure method is left where it is, and an
+// odometry jump is cut from the chain instead of being spread over the poses.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "slam2d/core/angles.hpp"
+#include "slam2d/core/rng.hpp"
+#include "slam2d/slam/fusion/odometry_smoothing.hpp"
+
+namespace slam2d {
+namespace {
+
+// 10 Hz, 300 s: 0.5 m/s along curves that change every 10 s, with stops and turns in place.
+std::vector<SE2> drive() {
+  std::vector<SE2> path;
+  SE2 pose;
+  path.push_back(pose);
+  for (int i = 1; i < 3000; ++i) {
+    const int phase = (i / 100) % 6;
+    const double turn = phase == 0 ? 0.02 : phase == 1 ? -0.015 : phase == 2 ? 0.0 : phase == 3 ? 0.01 : 0.0;
+    SE2 step(0.05, 0.0, turn);
+    if (phase == 4) step = SE2(0.0, 0.0, 0.05);  // a turn in place
+    if (phase == 5 && i % 100 < 30) step = SE2();  // standing
+    pose = pose * step;
+    path.push_back(pose);
+  }
+  return path;
+}
+
+// Each pose moved by white noise in its own frame.
+std::vector<SE2> jittered(const std::vector<SE2>& path, double sigma_xy, double sigma_theta, Rng& rng) {
+  std::vector<SE2> out;
+  for (const SE2& pose : path) out.push_back(pose * SE2(rng.gaussian(0, sigma_xy), rng.gaussian(0, sigma_xy), rng.gaussian(0, sigma_theta)));
+  return out;
+}
+
+// Odometry: the path's increments, each with noise growing with its length and turn (a random walk).
+std::vector<SE2> odometry_of(const std::vector<SE2>& path, double per_metre, double per_radian, Rng& rng) {
+  std::vector<SE2> out{path.front()};
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const SE2 u = path[i - 1].between(path[i]);
+    const double d = u.translation().norm();
+    const double a = std::abs(u.theta());
+    const double st = per_metre * d + 0.2 * per_radian * a + 1e-4;
+    const double sr = per_metre * d + per_radian * a + 1e-4;
+    out.push_back(out.back() * u * SE2(rng.gaussian(0, st), rng.gaussian(0, st), rng.gaussian(0, sr)));
+  }
+  return out;
+}
+
+// Mean translational error of the relations i -> i + span against the path's (Kuemmerle's).
+double relation_error(const std::vector<SE2>& estimate, const std::vector<SE2>& truth, std::size_t span) {
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i + span < truth.size(); i += 5) {
+    const SE2 e = truth[i].between(truth[i + span]).between(estimate[i].between(estimate[i + span]));
+    sum += e.translation().norm();
+    ++count;
+  }
+  return sum / static_cast<double>(count);
+}
+
+TEST(OdometrySmoothing, RecoversTheJitterOfEachStream) {
+  Rng rng(7);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = jittered(truth, 0.02, 0.015, rng);
+  const std::vector<SE2> odometry = odometry_of(truth, 0.02, 0.02, rng);
+  const PoseStreamNoise noise = estimate_pose_stream_noise(method, odometry);
+  for (int axis = 0; axis < 2; ++axis) EXPECT_NEAR(noise.method_jitter[axis], 0.02, 0.004) << axis;
+  EXPECT_NEAR(noise.method_jitter[2], 0.015, 0.003);
+  // The odometry has no white noise of its own: its random walk shows in the drift's scale only.
+  EXPECT_LT(noise.odometry_jitter.maxCoeff(), 0.005);
+}
+
+TEST(OdometrySmoothing, AJitteryMethodBecomesBetterThanBothOnShortRelations) {
+  Rng rng(11);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = jittered(truth, 0.02, 0.015, rng);
+  const std::vector<SE2> odometry = odometry_of(truth, 0.02, 0.02, rng);
+  OdometrySmoothingStats stats;
+  const std::vector<SE2> smoothed = smooth_with_odometry(method, odometry, {}, &stats);
+  ASSERT_TRUE(stats.applied);
+  EXPECT_EQ(stats.poses, truth.size());
+  EXPECT_LT(stats.steps_refused, 10u);
+  for (const std::size_t span : {10u, 100u}) {  // 1 s and 10 s
+    const double m = relation_error(method, truth, span);
+    const double o = relation_error(odometry, truth, span);
+    const double s = relation_error(smoothed, truth, span);
+    EXPECT_LT(s, 0.6 * m) << span << ": method " << m << " odometry " << o << " smoothed " << s;
+    // The odometry is the better stream over 1 s here (a few mm): the fused relations come within
+    // the noise of the estimated covariances of it (the exact product would reach it).
+    EXPECT_LE(s, 1.25 * o) << span << ": method " << m << " odometry " << o << " smoothed " << s;
+  }
+  // Over the whole run the method's (bounded) error holds the drift of the odometry: the smoothed
+  // poses stay near the path.
+  double worst = 0.0;
+  for (std::size_t i = 0; i < truth.size(); ++i) worst = std::max(worst, (smoothed[i].translation() - truth[i].translation()).norm());
+  EXPECT_LT(worst, 0.1);
+}
+
+TEST(OdometrySmoothing, ASureMethodIsLeftWhereItIs) {
+  Rng rng(3);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = jittered(truth, 0.001, 0.0005, rng);  // a good scan matcher
+  const std::vector<SE2> odometry = jittered(odometry_of(truth, 0.05, 0.05, rng), 0.01, 0.01, rng);
+  OdometrySmoothingStats stats;
+  const std::vector<SE2> smoothed = smooth_with_odometry(method, odometry, {}, &stats);
+  ASSERT_TRUE(stats.applied);
+  EXPECT_LT(stats.max_change_m, 0.003);
+  EXPECT_LE(relation_error(smoothed, truth, 10), 1.05 * relation_error(method, truth, 10));
+}
+
+TEST(OdometrySmoothing, AnOdometryJumpIsCutNotSpread) {
+  Rng rng(5);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = jittered(truth, 0.01, 0.005, rng);
+  std::vector<SE2> odometry = odometry_of(truth, 0.02, 0.02, rng);
+  for (std::size_t i = 1500; i < odometry.size(); ++i) odometry[i] = SE2(1.0, 0.0, 0.3) * odometry[i];  // a 1 m jump
+  OdometrySmoothingStats stats;
+  const std::vector<SE2> smoothed = smooth_with_odometry(method, odometry, {}, &stats);
+  ASSERT_TRUE(stats.applied);
+  EXPECT_GE(stats.steps_refused, 1u);
+  double worst = 0.0;
+  for (std::size_t i = 1400; i < 1600; ++i) worst = std::max(worst, (smoothed[i].translation() - truth[i].translation()).norm());
+  EXPECT_LT(worst, 0.05);
+}
+
+TEST(OdometrySmoothing, LeavesThePosesWhenItCannotOrMayNot) {
+  Rng rng(1);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = jittered(truth, 0.02, 0.01, rng);
+  OdometrySmoothingStats stats;
+  OdometrySmoothingConfig off;
+  off.enabled = false;
+  EXPECT_EQ(smooth_with_odometry(method, truth, off, &stats), method);
+  EXPECT_FALSE(stats.applied);
+  EXPECT_EQ(stats.skipped, "disabled");
+  const std::vector<SE2> shorter(truth.begin(), truth.end() - 1);
+  EXPECT_EQ(smooth_with_odometry(method, shorter, {}, &stats), method);
+  EXPECT_FALSE(stats.applied);
+  const std::vector<SE2> few(method.begin(), method.begin() + 10);
+  EXPECT_EQ(smooth_with_odometry(few, few, {}, &stats), few);
+  EXPECT_FALSE(stats.applied);
+}
+
+}  // namespace
+}  // namespace slam2d
