@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The laser chain and the odometry moved in time along it (core/odometry_chain.hpp): hand-computed
-// interpolations, stamps that step back, ends held, and a shift undone by the opposite shift.
+// interpolations, a stamp written late, ends held, and a shift undone by the opposite shift.
 
 #include <gtest/gtest.h>
 
@@ -36,7 +36,7 @@ std::vector<SensorMessage> steady_log(std::size_t scans) {
 TEST(OdometryChain, HoldsTheLaserLinesAndTruePosesInFileOrderButNotOdom) {
   std::vector<SensorMessage> messages = steady_log(3);
   messages.emplace_back(TruePoseMessage{.stamp = 0.5, .true_pose = SE2(), .odom_pose = SE2(0.5, 0.0, 0.05)});
-  const std::vector<ChainPose> chain = laser_odometry_chain(messages);
+  const OdometryChain chain = laser_odometry_chain(messages);
   ASSERT_EQ(chain.size(), 4u);
   EXPECT_EQ(chain[0].message, 1u);
   EXPECT_EQ(chain[2].message, 5u);
@@ -45,31 +45,40 @@ TEST(OdometryChain, HoldsTheLaserLinesAndTruePosesInFileOrderButNotOdom) {
 }
 
 TEST(OdometryChain, InterpolatesBetweenTheEntriesThatBracketTheStamp) {
-  const std::vector<ChainPose> chain = laser_odometry_chain(steady_log(6));
+  const OdometryChain chain = laser_odometry_chain(steady_log(6));
   // 0.5 s: halfway between the entries at 0.4 and 0.6 s; 0.25 s, a quarter from 0.2 to 0.4 s.
-  EXPECT_TRUE(test::poses_near(chain_pose_at(chain, 0, 0.5), SE2(0.5, 0.0, 0.05), 1e-12, 1e-12));
-  EXPECT_TRUE(test::poses_near(chain_pose_at(chain, 5, 0.25), SE2(0.25, 0.0, 0.025), 1e-12, 1e-12));
-  EXPECT_TRUE(test::poses_near(chain_pose_at(chain, 2, 0.4), SE2(0.4, 0.0, 0.04), 1e-12, 1e-12));
+  EXPECT_TRUE(test::poses_near(chain.at(0, 0.5), SE2(0.5, 0.0, 0.05), 1e-12, 1e-12));
+  EXPECT_TRUE(test::poses_near(chain.at(5, 0.25), SE2(0.25, 0.0, 0.025), 1e-12, 1e-12));
+  EXPECT_TRUE(test::poses_near(chain.at(2, 0.4), SE2(0.4, 0.0, 0.04), 1e-12, 1e-12));
 }
 
 TEST(OdometryChain, HoldsTheEndPosesBeyondTheChain) {
-  const std::vector<ChainPose> chain = laser_odometry_chain(steady_log(4));
-  EXPECT_TRUE(test::poses_near(chain_pose_at(chain, 1, -3.0), SE2(0.0, 0.0, 0.0), 1e-12, 1e-12));
-  EXPECT_TRUE(test::poses_near(chain_pose_at(chain, 1, 9.0), SE2(0.6, 0.0, 0.06), 1e-12, 1e-12));
+  const OdometryChain chain = laser_odometry_chain(steady_log(4));
+  EXPECT_TRUE(test::poses_near(chain.at(1, -3.0), SE2(0.0, 0.0, 0.0), 1e-12, 1e-12));
+  EXPECT_TRUE(test::poses_near(chain.at(1, 9.0), SE2(0.6, 0.0, 0.06), 1e-12, 1e-12));
 }
 
-TEST(OdometryChain, WalksInFileOrderSoThatAStampSteppingBackElsewhereDoesNotMisleadIt) {
-  // Stamps 0, 1, 2, 0.5 (out of order, far from the query), 3, 4: the query from entry 1 at
-  // 1.5 s must use entries 1 and 2, not the late entry stamped 0.5.
+TEST(OdometryChain, AStampWrittenLateKeepsItsPlaceOnThePath) {
+  // Scans every second at x = t, the fourth stamped 3.5 s where it was taken at 3 s (Intel writes
+  // a line up to 0.9 s late, the next ones on time): the chain's clock lowers it to the next
+  // stamp, 4 s, so its pose stays between its neighbours' and the path does not turn back.
   std::vector<SensorMessage> messages;
-  for (double t : {0.0, 1.0, 2.0}) messages.emplace_back(scan_at(t, SE2(t, 0.0, 0.0)));
-  messages.emplace_back(scan_at(0.5, SE2(10.0, 0.0, 0.0)));
-  for (double t : {3.0, 4.0}) messages.emplace_back(scan_at(t, SE2(t, 0.0, 0.0)));
-  const std::vector<ChainPose> chain = laser_odometry_chain(messages);
-  EXPECT_NEAR(chain_pose_at(chain, 1, 1.5).x(), 1.5, 1e-12);
-  // From entry 4 (3 s) back to 2.5 s: the first neighbours in file order whose stamps bracket it
-  // are the entry stamped 0.5 s and the one at 3 s.
-  EXPECT_NEAR(chain_pose_at(chain, 4, 2.5).x(), 10.0 + (3.0 - 10.0) * (2.0 / 2.5), 1e-12);
+  for (double t : {0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0}) messages.emplace_back(scan_at(t == 3.0 ? 4.5 : t, SE2(t, 0.0, 0.0)));
+  const OdometryChain chain = laser_odometry_chain(messages);
+  EXPECT_DOUBLE_EQ(chain[3].stamp, 4.0);
+  EXPECT_DOUBLE_EQ(chain[3].pose.x(), 3.0);
+  EXPECT_DOUBLE_EQ(chain[4].stamp, 4.0);
+  EXPECT_NEAR(chain.at(1, 1.5).x(), 1.5, 1e-12);                 // away from it, exact
+  EXPECT_NEAR(chain.at(1, 3.0).x(), 2.5, 1e-12);                 // between 2 s and the late one at "4 s"
+  EXPECT_DOUBLE_EQ(chain.at(3, 4.0).x(), 3.0);                   // each sample at its own stamp: its pose,
+  EXPECT_DOUBLE_EQ(chain.at(4, 4.0).x(), 4.0);                   // whatever samples share the stamp
+  EXPECT_NEAR(chain.at(3, 4.5).x(), 4.5, 1e-12);
+  double previous = -1.0;
+  for (std::size_t k = 0; k < chain.size(); ++k) {
+    const double x = chain.shifted(k, 0.7).x();
+    EXPECT_GE(x, previous) << k;
+    previous = x;
+  }
 }
 
 TEST(OdometryChain, AShiftGivesEachScanTheOdometryOfLaterAndTheOppositeShiftUndoesIt) {
@@ -88,12 +97,16 @@ TEST(OdometryChain, AShiftGivesEachScanTheOdometryOfLaterAndTheOppositeShiftUndo
   }
 }
 
-TEST(OdometryChain, ShiftingALogWhoseStampsNeverAdvanceEnds) {
+TEST(OdometryChain, ShiftingALogWhoseStampsNeverAdvanceHoldsItsEnds) {
+  // All stamps 0 (Örebro's): every later time is beyond the chain's end, every earlier one before
+  // its start. A binary search per pose: no walk along the chain's 10^4 samples.
   std::vector<SensorMessage> messages;
   for (int i = 0; i < 10000; ++i) messages.emplace_back(scan_at(0.0, SE2(i, 0.0, 0.0)));
-  shift_scan_odometry(messages, 0.5);  // all stamps 0: every walk stops after kMaxChainWalk entries
-  EXPECT_EQ(messages.size(), 10000u);
-  EXPECT_DOUBLE_EQ(std::get<LaserMessage>(messages[0]).odom_pose.x(), static_cast<double>(kMaxChainWalk + 1));
+  std::vector<SensorMessage> back = messages;
+  EXPECT_EQ(shift_scan_odometry(messages, 0.5), 9999u);
+  EXPECT_DOUBLE_EQ(std::get<LaserMessage>(messages[0]).odom_pose.x(), 9999.0);
+  EXPECT_EQ(shift_scan_odometry(back, -0.5), 9999u);
+  EXPECT_DOUBLE_EQ(std::get<LaserMessage>(back[9999]).odom_pose.x(), 0.0);
   EXPECT_EQ(shift_scan_odometry(messages, 0.0), 0u);
 }
 

@@ -2,6 +2,7 @@
 #include "slam2d/core/odometry_chain.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace slam2d {
 
@@ -12,46 +13,48 @@ bool in_laser_chain(const SensorMessage& message) {
   return std::holds_alternative<TruePoseMessage>(message);
 }
 
-// The pose between entries a and b at `stamp` (a's pose when their stamps do not span it).
-SE2 between_entries(const ChainPose& a, const ChainPose& b, double stamp) {
-  const double span = b.stamp - a.stamp;
-  if (!(span > 0.0)) return stamp >= b.stamp ? b.pose : a.pose;
-  return interpolate(a.pose, b.pose, std::clamp((stamp - a.stamp) / span, 0.0, 1.0));
-}
-
 }  // namespace
 
-std::vector<ChainPose> laser_odometry_chain(const std::vector<SensorMessage>& messages) {
-  std::vector<ChainPose> chain;
-  for (std::size_t i = 0; i < messages.size(); ++i) {
-    if (in_laser_chain(messages[i])) chain.push_back({stamp_of(messages[i]), odometry_pose(messages[i]), i});
-  }
-  return chain;
+OdometryChain::OdometryChain(std::vector<ChainSample> samples) : samples_(std::move(samples)) {
+  for (std::size_t k = samples_.size(); k-- > 1;) samples_[k - 1].stamp = std::min(samples_[k - 1].stamp, samples_[k].stamp);
 }
 
-SE2 chain_pose_at(const std::vector<ChainPose>& chain, std::size_t from, double stamp) {
-  std::size_t k = from;
-  const std::size_t last = chain.size() - 1;
-  if (stamp >= chain[from].stamp) {
-    // Forward: the first k with stamp(k + 1) >= stamp.
-    while (k < last && chain[k + 1].stamp < stamp && k - from < kMaxChainWalk) ++k;
-    return k == last ? chain[last].pose : between_entries(chain[k], chain[k + 1], stamp);
+SE2 OdometryChain::at(std::size_t k, double time) const {
+  const auto by_stamp = [](const ChainSample& sample, double t) { return sample.stamp < t; };
+  const auto before_stamp = [](double t, const ChainSample& sample) { return t < sample.stamp; };
+  const auto begin = samples_.begin();
+  const auto from = begin + static_cast<std::ptrdiff_t>(k);
+  std::size_t after;  // the first sample at or after `time` (later than it, looking back)
+  if (time >= samples_[k].stamp) {
+    after = static_cast<std::size_t>(std::lower_bound(from, samples_.end(), time, by_stamp) - begin);
+    if (after == k) return samples_[k].pose;
+  } else {
+    after = static_cast<std::size_t>(std::upper_bound(begin, from, time, before_stamp) - begin);
   }
-  // Back: the first k with stamp(k - 1) <= stamp.
-  while (k > 0 && chain[k - 1].stamp > stamp && from - k < kMaxChainWalk) --k;
-  return k == 0 ? chain[0].pose : between_entries(chain[k - 1], chain[k], stamp);
+  if (after == samples_.size()) return samples_.back().pose;
+  if (after == 0) return samples_.front().pose;
+  // stamp(before) <= time < stamp(after) looking back, stamp(before) < time <= stamp(after) forward.
+  const ChainSample& before = samples_[after - 1];
+  const ChainSample& next = samples_[after];
+  return interpolate(before.pose, next.pose, (time - before.stamp) / (next.stamp - before.stamp));
+}
+
+OdometryChain laser_odometry_chain(const std::vector<SensorMessage>& messages) {
+  std::vector<ChainSample> samples;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (in_laser_chain(messages[i])) samples.push_back({i, stamp_of(messages[i]), odometry_pose(messages[i])});
+  }
+  return OdometryChain(std::move(samples));
 }
 
 std::size_t shift_scan_odometry(std::vector<SensorMessage>& messages, double by) {
   if (by == 0.0) return 0;
-  const std::vector<ChainPose> chain = laser_odometry_chain(messages);
-  std::vector<SE2> shifted;
-  shifted.reserve(chain.size());
-  for (std::size_t k = 0; k < chain.size(); ++k) shifted.push_back(chain_pose_at(chain, k, chain[k].stamp + by));
+  const OdometryChain chain = laser_odometry_chain(messages);
   std::size_t changed = 0;
   for (std::size_t k = 0; k < chain.size(); ++k) {
-    if (shifted[k] == chain[k].pose) continue;
-    set_odometry_pose(messages[chain[k].message], shifted[k]);
+    const SE2 pose = chain.shifted(k, by);  // from the chain as read: it is not written to
+    if (pose == chain[k].pose) continue;
+    set_odometry_pose(messages[chain[k].message], pose);
     ++changed;
   }
   return changed;

@@ -1,21 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The laser chain of a sensor log, and the odometry moved in time along it.
+// An odometry chain of a sensor log, and the odometry moved in time along it: the one home of
+// "the odometry pose at a shifted time", behind the compensation of an odometry clock that runs
+// ahead of the laser (io/log_reader.hpp), its estimate (registration/odometry_time_offset.hpp)
+// and the fault that makes such a log (sim/fault_injection.hpp, odom-shift).
 //
-// The laser chain is the odometry pose written beside every measurement (a laser line that
-// carries poses, TRUEPOS), in file order: what every method reads as "the odometry at this scan".
-// (A CARMEN log samples the odometry twice, also in its ODOM lines: sim/fault_injection.hpp. The
-// ODOM chain is left alone here: no method reads it, and in the SLAM-corrected logs it is not
-// even the same odometry.) The chain is smooth in file order, not always in its stamps: Intel's
-// step back. So the chain's pose at a time is found by walking from a message's own place in the
-// chain, forward or back in file order, to the first pair of neighbours whose stamps bracket that
-// time, and interpolating between them (linear in x, y and the shorter way round in heading).
-// Beyond either end of the chain the end pose is held. The walk stops after kMaxChainWalk entries
-// (a log whose stamps do not advance, as Örebro's all-zero ones, holds the pose reached).
+// A chain is one sequence of odometry samples in file order. The laser chain is the odometry pose
+// written beside every measurement (a laser line that carries poses, TRUEPOS): what every method
+// reads as "the odometry at this scan". (A CARMEN log samples the odometry a second time, in its
+// ODOM lines; the fault moves that chain too, the compensation leaves it alone: no method reads it,
+// and in the SLAM-corrected logs it is not even the same odometry.)
 //
-// Shifting the odometry in time (shift_scan_odometry) is the one operation behind both the
-// compensation of an odometry clock that runs ahead of the laser (io/log_reader.hpp,
-// registration/odometry_time_offset.hpp) and the tests that make such a log.
+// A chain is smooth in file order, not always in its stamps: Intel's step back (a line written up
+// to 0.9 s late, the lines after it on time again). So the chain's clock is its stamps lowered to
+// be non-decreasing, each to the smallest stamp at or after it: a late sample keeps its place on
+// the path, where sorting by stamp would put it among later poses and make the path zigzag. The
+// pose at a time is then interpolated between the two samples around it (linear in x and y, the
+// shorter way round in heading), found by binary search on the side of the sample asked from, and
+// held beyond either end. A log whose stamps never advance (Örebro's are all 0) gives the end poses.
 
 #include <cstddef>
 #include <vector>
@@ -25,21 +27,37 @@
 
 namespace slam2d {
 
-/// Entries walked at most when looking for a stamp along the chain.
-inline constexpr std::size_t kMaxChainWalk = 4096;
+struct ChainSample {
+  std::size_t message = 0;  // index of its message in the log
+  double stamp = 0.0;       // s; in a chain, lowered to be non-decreasing (see above)
+  SE2 pose;                 // T_odom_robot
+};
 
-struct ChainPose {
-  double stamp = 0.0;         // s
-  SE2 pose;                   // T_odom_robot
-  std::size_t message = 0;    // index of its message in the log
+/// Odometry samples in file order, on the chain's clock (stamps lowered to be non-decreasing).
+class OdometryChain {
+ public:
+  OdometryChain() = default;
+  /// `samples` in file order, with their stamps as logged.
+  explicit OdometryChain(std::vector<ChainSample> samples);
+
+  /// The pose at `time` (s, on the chain's clock), seen from sample k: between the two samples
+  /// around `time` on k's side, so time = stamp of k gives k's own pose whatever samples share its
+  /// stamp; the end poses beyond the chain. k must index the chain.
+  SE2 at(std::size_t k, double time) const;
+
+  /// Sample k's odometry moved by `by` s: the pose at its own stamp + by (by > 0: later).
+  SE2 shifted(std::size_t k, double by) const { return at(k, samples_[k].stamp + by); }
+
+  std::size_t size() const { return samples_.size(); }
+  bool empty() const { return samples_.empty(); }
+  const ChainSample& operator[](std::size_t k) const { return samples_[k]; }
+
+ private:
+  std::vector<ChainSample> samples_;
 };
 
 /// The laser chain of `messages` (laser lines with poses and TRUEPOS, in file order).
-std::vector<ChainPose> laser_odometry_chain(const std::vector<SensorMessage>& messages);
-
-/// The chain's pose at `stamp`, walking from entry `from` (see above). `chain` must not be empty
-/// and `from` must index it.
-SE2 chain_pose_at(const std::vector<ChainPose>& chain, std::size_t from, double stamp);
+OdometryChain laser_odometry_chain(const std::vector<SensorMessage>& messages);
 
 /// Every laser-chain message's odometry pose becomes the chain's pose at its own stamp + `by`
 /// (s): the odometry of `by` s later. A laser line's estimated pose follows when it repeated the

@@ -28,7 +28,7 @@ struct HeadingPair {
 };
 
 // The scans used: chain entries of the first laser type that carries odometry.
-std::vector<std::size_t> scan_entries(const std::vector<SensorMessage>& messages, const std::vector<ChainPose>& chain) {
+std::vector<std::size_t> scan_entries(const std::vector<SensorMessage>& messages, const OdometryChain& chain) {
   std::vector<std::size_t> scans;
   const std::string* type = nullptr;
   for (std::size_t k = 0; k < chain.size(); ++k) {
@@ -41,7 +41,7 @@ std::vector<std::size_t> scan_entries(const std::vector<SensorMessage>& messages
 }
 
 // Step 1: the scan stride s giving pairs about pair_span apart (by the median scan period).
-std::size_t pair_stride(const std::vector<ChainPose>& chain, const std::vector<std::size_t>& scans, double pair_span) {
+std::size_t pair_stride(const OdometryChain& chain, const std::vector<std::size_t>& scans, double pair_span) {
   std::vector<double> periods;
   for (std::size_t i = 1; i < scans.size(); ++i) {
     const double dt = chain[scans[i]].stamp - chain[scans[i - 1]].stamp;
@@ -94,7 +94,7 @@ std::optional<SE2> gated_match(const PointCloud2& target, const PointCloud2& sou
 }
 
 // Step 2: the heading pairs of one window, matched along it with a constant-velocity guess.
-void match_window(const std::vector<SensorMessage>& messages, const std::vector<ChainPose>& chain,
+void match_window(const std::vector<SensorMessage>& messages, const OdometryChain& chain,
                   const std::vector<std::size_t>& scans, std::size_t start, std::size_t stride, std::size_t group,
                   const OdometryTimeOffsetConfig& config, std::vector<HeadingPair>& pairs) {
   const auto scan_at = [&](std::size_t i) -> const LaserScan& {
@@ -132,7 +132,7 @@ struct CostCurves {
   std::vector<std::size_t> counts;          // pairs per group
 };
 
-CostCurves heading_costs(const std::vector<ChainPose>& chain, const std::vector<HeadingPair>& pairs,
+CostCurves heading_costs(const OdometryChain& chain, const std::vector<HeadingPair>& pairs,
                          std::size_t groups, const OdometryTimeOffsetConfig& config) {
   CostCurves curves;
   const auto steps = static_cast<long>(std::floor(config.max_offset / config.grid_step + 1e-9));
@@ -144,8 +144,8 @@ CostCurves heading_costs(const std::vector<ChainPose>& chain, const std::vector<
     std::vector<double>& sum = curves.sums[pair.group];
     for (std::size_t k = 0; k < curves.offsets.size(); ++k) {
       const double d = curves.offsets[k];
-      const SE2 a = chain_pose_at(chain, pair.first, chain[pair.first].stamp - d);
-      const SE2 b = chain_pose_at(chain, pair.second, chain[pair.second].stamp - d);
+      const SE2 a = chain.shifted(pair.first, -d);
+      const SE2 b = chain.shifted(pair.second, -d);
       const double residual = angle_difference(pair.turn, angle_difference(b.theta(), a.theta()));
       const double r = residual / config.residual_scale;
       sum[k] += std::log1p(r * r);  // rho, the Cauchy cost
@@ -202,7 +202,7 @@ double cost_at(const CostCurves& curves, const std::vector<double>& cost, double
 
 OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
   OdometryTimeOffset result;
-  const std::vector<ChainPose> chain = laser_odometry_chain(messages);
+  const OdometryChain chain = laser_odometry_chain(messages);
   const std::vector<std::size_t> scans = scan_entries(messages, chain);
   // Step 1: windows of pairs spread over the log, dealt into the jackknife groups.
   const std::size_t stride = pair_stride(chain, scans, config.pair_span);

@@ -22,8 +22,9 @@
 //   3. For every candidate d on a grid over [-max_offset, max_offset] the robust cost
 //        C(d) = mean_j rho(dtheta_j - [theta_odo(t_j+s - d) - theta_odo(t_j - d)]),           (1)
 //      rho(e) = log(1 + (e / residual_scale)^2) (Cauchy), theta_odo the laser chain's heading
-//      interpolated at shifted stamps (core/odometry_chain.hpp: the chain is walked in file
-//      order, so Intel's backward stamps do not mislead it).
+//      interpolated at shifted stamps (core/odometry_chain.hpp: on the chain's clock, stamps
+//      lowered to be non-decreasing, so Intel's backward stamps do not mislead it; the same
+//      shift the compensation and the odom-shift fault make).
 //   4. d* = the grid's minimum refined by a parabola through it and its neighbours.
 //   5. Confidence: the windows are dealt into jackknife_groups groups and d* re-estimated
 //      without each; the jackknife standard error of those estimates is the uncertainty. A log

@@ -574,61 +574,27 @@ Changes apply(const OdomNoiseFault& fault, Messages& messages, Rng& rng) {
           {"laser_path_length_after_m", laser_path_length(messages)}};
 }
 
-// One odometry chain in file order, its stamps made non-decreasing by lowering each to the
-// smallest stamp at or after it. Intel now and then writes a stamp up to 0.9 s late and the
-// lines after it are on time again: lowered, that pose keeps its place on the path, where sorting
-// by stamp would put it among later poses and make the path zigzag.
-struct ChainSamples {
-  std::vector<std::size_t> message;  // index of each sample's message
-  std::vector<double> stamp;         // s, non-decreasing
-  std::vector<SE2> pose;
-
-  // The pose at `time`, seen from sample k: between the two samples around `time` on k's side
-  // (so time = stamp[k] gives pose[k], whatever samples share its stamp), linear in translation,
-  // shortest arc in heading; held at the chain's ends.
-  SE2 at(std::size_t k, double time) const {
-    const auto begin = stamp.begin();
-    std::size_t after;  // the first sample at or after `time` (later than it, looking back)
-    if (time >= stamp[k]) {
-      after = static_cast<std::size_t>(std::lower_bound(begin + static_cast<std::ptrdiff_t>(k), stamp.end(), time) - begin);
-      if (after == k) return pose[k];
-    } else {
-      after = static_cast<std::size_t>(std::upper_bound(begin, begin + static_cast<std::ptrdiff_t>(k), time) - begin);
-    }
-    if (after == stamp.size()) return pose.back();
-    if (after == 0) return pose.front();
-    const std::size_t before = after - 1;
-    return interpolate(pose[before], pose[after], (time - stamp[before]) / (stamp[after] - stamp[before]));
-  }
-};
-
-std::array<ChainSamples, 2> chain_samples(const Messages& messages) {
-  std::array<ChainSamples, 2> chains;
+// Both odometry chains (core/odometry_chain.hpp has their clock and the shift along it).
+std::array<OdometryChain, 2> odometry_chains(const Messages& messages) {
+  std::array<std::vector<ChainSample>, 2> samples;
   for (std::size_t i = 0; i < messages.size(); ++i) {
-    const std::optional<Chain> chain = chain_of(messages[i]);
-    if (!chain) continue;
-    chains[*chain].message.push_back(i);
-    chains[*chain].stamp.push_back(stamp_of(messages[i]));
-    chains[*chain].pose.push_back(odometry_pose(messages[i]));
+    if (const std::optional<Chain> chain = chain_of(messages[i])) samples[*chain].push_back({i, stamp_of(messages[i]), odometry_pose(messages[i])});
   }
-  for (ChainSamples& chain : chains) {
-    for (std::size_t k = chain.stamp.size(); k-- > 1;) chain.stamp[k - 1] = std::min(chain.stamp[k - 1], chain.stamp[k]);
-  }
-  return chains;
+  return {OdometryChain(std::move(samples[kLaserChain])), OdometryChain(std::move(samples[kOdomChain]))};
 }
 
 Changes apply(const OdomShiftFault& fault, Messages& messages, Rng&) {
   std::size_t shifted = 0;
   double largest_m = 0.0;  // the laser chain's largest pose change
-  const std::array<ChainSamples, 2> chains = chain_samples(messages);
+  const std::array<OdometryChain, 2> chains = odometry_chains(messages);
   for (std::size_t c = 0; c < chains.size(); ++c) {
-    const ChainSamples& chain = chains[c];
-    for (std::size_t k = 0; k < chain.message.size(); ++k) {
-      const SE2 pose = chain.at(k, chain.stamp[k] + fault.by);
-      if (pose == chain.pose[k]) continue;
-      set_odometry_pose(messages[chain.message[k]], pose);
+    const OdometryChain& chain = chains[c];
+    for (std::size_t k = 0; k < chain.size(); ++k) {
+      const SE2 pose = chain.shifted(k, fault.by);
+      if (pose == chain[k].pose) continue;
+      set_odometry_pose(messages[chain[k].message], pose);
       ++shifted;
-      if (c == kLaserChain) largest_m = std::max(largest_m, (pose.translation() - chain.pose[k].translation()).norm());
+      if (c == kLaserChain) largest_m = std::max(largest_m, (pose.translation() - chain[k].pose.translation()).norm());
     }
   }
   return {{"odometry_poses_shifted", static_cast<double>(shifted)}, {"max_pose_change_m", largest_m}};

@@ -88,9 +88,10 @@ struct OdomNoiseFault {
 /// Odometry and laser out of step (unsynchronised clocks): every odometry pose becomes its chain's
 /// pose at its own stamp + by, interpolated along the chain (linear in translation, shortest arc in
 /// heading) and held at the chain's ends. by > 0: the odometry runs ahead of the laser (the pose
-/// beside a scan is where the robot is `by` seconds later). The chain is taken in file order with
-/// each stamp lowered to the smallest one at or after it (Intel's late stamps), so a stamp that
-/// steps back does not make the path zigzag; tv and rv are kept.
+/// beside a scan is where the robot is `by` seconds later). The shift is the one the time-offset
+/// compensation undoes (OdometryChain, core/odometry_chain.hpp): each chain in file order with its
+/// stamps lowered to be non-decreasing (Intel's late stamps), so a stamp that steps back does not
+/// make the path zigzag; tv and rv are kept.
 struct OdomShiftFault {
   double by = 0.6;  // s, |by| <= 5
 };
