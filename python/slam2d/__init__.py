@@ -128,18 +128,19 @@ class MapRun:
 
 
 def map_log(log, method="graph", out=None, config=None, seed=None, resolution=None, no_odometry=False,
-            trajectory_frame="robot", odometry_source="log", scan_rate=None):
+            trajectory_frame="robot", odometry_source="log", scan_rate=None, odometry_smoothing=True):
     """Maps a log (CARMEN, ROS 1 bag, MCAP or rosbag2 folder) as `slam2d map` does, with the same
     code: the trajectory is the CLI's, bit for bit. `out` is the output folder (a temporary one,
     removed afterwards, when None); `config` a preset file (configs/<method>.yaml) or a dict of the
     method's fields (default_config(method)). `odometry_source` and `scan_rate` are the CLI's
-    --odometry-source (log, none, hector or a trajectory file) and --scan-rate (Hz); method
+    --odometry-source (log, none, hector or a trajectory file) and --scan-rate (Hz);
+    `odometry_smoothing=False` is --no-odometry-smoothing (the method's own poses); method
     "hector+graph" or "hector+rbpf" runs the 2015 chain (docs/methods/fusion.md)."""
     def run(folder):
         with tempfile.TemporaryDirectory(prefix="slam2d-") as presets:
             preset = _preset_file(method, config, presets) if isinstance(config, dict) else os.fspath(config or "")
             result = _slam2d.map_log(os.fspath(log), method, folder, preset, seed, resolution, no_odometry,
-                                     trajectory_frame, os.fspath(odometry_source), scan_rate)
+                                     trajectory_frame, os.fspath(odometry_source), scan_rate, odometry_smoothing)
         return MapRun(result["trajectory"], result["map"], json.loads(result["summary"]), folder)
     if out is not None:
         return run(os.fspath(out))

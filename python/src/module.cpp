@@ -362,7 +362,7 @@ PYBIND11_MODULE(_slam2d, m) {
       "map_log",
       [](const std::string& log, const std::string& method, const std::string& out_dir, const std::string& config,
          std::optional<std::uint64_t> seed, std::optional<double> resolution, bool no_odometry, const std::string& frame,
-         const std::string& odometry_source, std::optional<double> scan_rate) {
+         const std::string& odometry_source, std::optional<double> scan_rate, bool odometry_smoothing) {
         cli::MapJobOptions options;
         options.log = log;
         options.method = method;
@@ -374,6 +374,7 @@ PYBIND11_MODULE(_slam2d, m) {
         options.trajectory_frame = frame;
         options.odometry_source = odometry_source;
         options.scan_rate = scan_rate;
+        options.odometry_smoothing = odometry_smoothing;
         options.quiet = true;
         cli::MapJobResult result;
         {
@@ -388,7 +389,7 @@ PYBIND11_MODULE(_slam2d, m) {
       },
       py::arg("log"), py::arg("method"), py::arg("out_dir"), py::arg("config") = "", py::arg("seed") = py::none(),
       py::arg("resolution") = py::none(), py::arg("no_odometry") = false, py::arg("trajectory_frame") = "robot",
-      py::arg("odometry_source") = "log", py::arg("scan_rate") = py::none(),
+      py::arg("odometry_source") = "log", py::arg("scan_rate") = py::none(), py::arg("odometry_smoothing") = true,
       "Runs `slam2d map` on a log (CARMEN or bag) and writes its outputs into out_dir");
 
   m.def(
