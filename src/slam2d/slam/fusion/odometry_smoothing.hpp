@@ -24,6 +24,8 @@
 //    gone wrong, an odometry jump) is left out. The odometry's second differences are divided by
 //    its systematic scale first (a wheel's: the two streams' increments over 16 scans, regressed),
 //    or a scale error of a few percent would pass the robot's own accelerations off as noise.
+//    Translation is taken as isotropic (the mean of x's and y's variances): apart, the lateral
+//    jitter of a stream could come out near 0 where the robot's change of velocity hides it.
 // 2. The odometry's drift: the disagreement of the two streams over k scans (k = 1, 2, 3, 4, 6, 8,
 //    12, 16), less the white part 2 (R + W), against the sum of the motion noise model's variances
 //    along those k increments (core/motion_fusion.hpp, unscaled): a scale s times that sum plus a
@@ -79,7 +81,7 @@ void describe(Fields& f, OdometrySmoothingConfig& c) {
 void validate(const OdometrySmoothingConfig& config);
 
 /// What the data showed of the two streams (standard deviations per axis of the robot frame:
-/// x, y in m, theta in rad).
+/// x, y in m, the same for both, theta in rad).
 struct PoseStreamNoise {
   Eigen::Vector3d method_jitter = Eigen::Vector3d::Zero();    // sqrt(R)
   Eigen::Vector3d odometry_jitter = Eigen::Vector3d::Zero();  // sqrt(W)
