@@ -4,7 +4,7 @@
 // laser-noise:sigma=0.1,bearing=1, seed 1): on relations at most 10 s apart the noisy run's poses
 // are worse than the odometry alone; smoothed they are better than both, and the clean run stays
 // where it was (bench/BENCHMARKS.md, "With the per-scan poses smoothed by the odometry", has the
-// figures of `slam2d map`, whose Hector differs from this one only by the odometry guard).
+// figures of `slam2d map --method hector`, the same run).
 
 #include <gtest/gtest.h>
 
