@@ -131,6 +131,10 @@ MatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& in
 
 // Gauss-Newton on the pyramid from `start`, with the odometry settings or those without, and
 // the retry over every heading after a poor fit (e.g. the robot turned during a gap in the log).
+// The retry must fit a fifth better to win (kCompetingStartAdvantage): a poor fit can also mean a
+// scan the map cannot explain (a passer-by, a door, a burst of bad readings) at the right pose,
+// and among every heading one fits a little better by chance. Taking it would turn the tracker
+// far and back a few scans later, a jump that anything downstream reads as motion.
 MatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, const SE2& start,
                                          bool with_odometry, const std::optional<PosePrior>& prior) const {
   const HectorMatcherConfig& matcher = with_odometry ? config_.matcher : free_matcher_;
@@ -139,7 +143,7 @@ MatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, c
     HectorMatcherConfig wide = matcher;
     wide.rotation_search_range = std::numbers::pi;
     MatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
-    if (retry.cost < result.cost) result = std::move(retry);
+    if (retry.cost < kCompetingStartAdvantage * result.cost) result = std::move(retry);
   }
   return result;
 }

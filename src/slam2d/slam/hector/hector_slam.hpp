@@ -74,7 +74,7 @@ struct HectorSlamConfig {
   // SLAM's tracker keeps its weaker prior there: the sparse corrected logs need it).
   bool prior_at_catch_ups = false;
   // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
-  // retried with a rotation search over every heading, and the better fit is kept. Off with
+  // retried with a rotation search over every heading, kept when it fits a fifth better. Off with
   // odometry (picked on ACES, not yet checked on a held-out log: docs/defaults.md).
   double recovery_residual = 1.0;
   // Without odometry (prior != kOdometry) these replace the settings above and the matcher's:
