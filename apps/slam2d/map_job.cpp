@@ -212,7 +212,7 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
-    run.method_summary.merge(fusion_report(slam.fusion_stats(), slam.odometry_noise()));
+    if (config.fuse_odometry) run.method_summary.merge(fusion_report(slam.fusion_stats(), slam.odometry_noise()));
   }
   return run;
 }
@@ -248,7 +248,7 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
     run.method_summary.add("odometry_edges", stats.odometry_edges);
-    run.method_summary.merge(fusion_report(stats.fusion, slam.odometry_noise()));
+    if (config.odometry_edges) run.method_summary.merge(fusion_report(stats.fusion, slam.odometry_noise()));
   }
   return run;
 }

@@ -163,7 +163,8 @@ void run_odometry(const OdometryOptions& options) {
   std::vector<std::string> warnings = reader_warnings(reader);
   if (!options.no_odometry) {
     summary.merge(odometry_report(odometry.odometry_stats()));
-    summary.merge(fusion_report(stats.fusion, odometry.odometry_noise()));
+    // The fusion's counts only when it ran (fuse_odometry): zeros would read as "never disagreed".
+    if (odometry.config().fuse_odometry) summary.merge(fusion_report(stats.fusion, odometry.odometry_noise()));
     for (std::string& warning : odometry_warnings(odometry.odometry_stats())) warnings.push_back(std::move(warning));
   }
   summary.add("warnings", warnings);

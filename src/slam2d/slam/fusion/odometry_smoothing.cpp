@@ -63,9 +63,10 @@ Eigen::Vector3d odometry_scale(const std::vector<SE2>& method, const std::vector
 }
 
 // Per axis, the white variances of the two streams from their second differences (header, 1),
-// the odometry's divided by its scale first.
+// the odometry's divided by its scale first; the method's at `confidence` jackknife standard
+// errors below the estimate.
 void estimate_jitter(const std::vector<SE2>& method, const std::vector<SE2>& odometry, double trim_quantile,
-                     PoseStreamNoise& noise) {
+                     double confidence, PoseStreamNoise& noise) {
   const std::size_t n = method.size();
   const Eigen::Vector3d scale = odometry_scale(method, odometry);
   std::vector<Eigen::Vector3d> l;
@@ -76,6 +77,17 @@ void estimate_jitter(const std::vector<SE2>& method, const std::vector<SE2>& odo
     l.push_back(second_difference(method, i));
     o.push_back(second_difference(odometry, i).cwiseQuotient(scale));
   }
+  // Sums per contiguous block, for the estimate and its jackknife standard error.
+  constexpr std::size_t kBlocks = 20;
+  struct Sums {
+    Eigen::Vector3d ll = Eigen::Vector3d::Zero(), oo = Eigen::Vector3d::Zero(), lo = Eigen::Vector3d::Zero();
+    Eigen::Vector3d count = Eigen::Vector3d::Zero();
+    Sums& operator+=(const Sums& o) {
+      ll += o.ll, oo += o.oo, lo += o.lo, count += o.count;
+      return *this;
+    }
+  };
+  std::array<Sums, kBlocks> blocks{};
   std::vector<double> gap(l.size());
   for (int axis = 0; axis < 3; ++axis) {
     for (std::size_t k = 0; k < l.size(); ++k) gap[k] = std::abs(l[k][axis] - o[k][axis]);
@@ -83,26 +95,47 @@ void estimate_jitter(const std::vector<SE2>& method, const std::vector<SE2>& odo
     const auto nth = sorted.begin() + static_cast<std::ptrdiff_t>(trim_quantile * static_cast<double>(sorted.size() - 1));
     std::nth_element(sorted.begin(), nth, sorted.end());
     const double limit = *nth;
-    double ll = 0.0, oo = 0.0, lo = 0.0;
-    std::size_t kept = 0;
     for (std::size_t k = 0; k < l.size(); ++k) {
       if (gap[k] > limit) continue;
-      ll += l[k][axis] * l[k][axis];
-      oo += o[k][axis] * o[k][axis];
-      lo += l[k][axis] * o[k][axis];
-      ++kept;
+      Sums& b = blocks[k * kBlocks / l.size()];
+      b.ll[axis] += l[k][axis] * l[k][axis];
+      b.oo[axis] += o[k][axis] * o[k][axis];
+      b.lo[axis] += l[k][axis] * o[k][axis];
+      b.count[axis] += 1.0;
     }
-    const double count = static_cast<double>(std::max<std::size_t>(kept, 1));
-    noise.method_jitter[axis] = std::sqrt(std::max((ll - lo) / count, 0.0) / 6.0);
-    noise.odometry_jitter[axis] = std::sqrt(std::max((oo - lo) / count, 0.0) / 6.0);
   }
-  // Translation isotropic: the mean of x's and y's. Apart, a stream's lateral jitter came out near 0
-  // where the robot's own change of velocity hid it (scans 0.5 s apart), and the smoother trusted
-  // that stream's sideways motion (Intel at 2 Hz: 0.0135 -> 0.0167 m at 10 s; isotropic 0.0137).
-  for (Eigen::Vector3d* j : {&noise.method_jitter, &noise.odometry_jitter}) {
-    const double t = std::sqrt(0.5 * (j->x() * j->x() + j->y() * j->y()));
-    j->x() = t, j->y() = t;
+  // (R, W) variances from sums: translation isotropic (the mean of x's and y's: apart, a stream's
+  // lateral jitter came out near 0 where the robot's own change of velocity hid it, scans 0.5 s
+  // apart, and the smoother trusted that stream's sideways motion: Intel at 2 Hz 0.0135 -> 0.0167 m
+  // at 10 s; isotropic 0.0137).
+  const auto variances = [](const Sums& s) {
+    Eigen::Vector3d r, w;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double count = std::max(s.count[axis], 1.0);
+      r[axis] = (s.ll[axis] - s.lo[axis]) / count / 6.0;
+      w[axis] = (s.oo[axis] - s.lo[axis]) / count / 6.0;
+    }
+    r.x() = r.y() = 0.5 * (r.x() + r.y());
+    w.x() = w.y() = 0.5 * (w.x() + w.y());
+    return std::pair{r, w};
+  };
+  Sums all;
+  for (const Sums& b : blocks) all += b;
+  const auto [r, w] = variances(all);
+  // The jackknife over the blocks: where the robot's change of velocity between two scans dwarfs
+  // the noises (low scan rates), the differences above are small differences of large sums.
+  Eigen::Vector3d r_spread = Eigen::Vector3d::Zero();
+  for (const Sums& b : blocks) {
+    Sums rest = all;
+    rest.ll -= b.ll, rest.oo -= b.oo, rest.lo -= b.lo, rest.count -= b.count;
+    r_spread += (variances(rest).first - r).cwiseAbs2();
   }
+  const double factor = static_cast<double>(kBlocks - 1) / static_cast<double>(kBlocks);
+  const Eigen::Vector3d r_error = (factor * r_spread).cwiseSqrt();
+  // The method's jitter at its lower confidence bound: where the estimate is unsure, the method's
+  // poses are left more as they are (do no harm).
+  noise.method_jitter = (r - confidence * r_error).cwiseMax(0.0).cwiseSqrt();
+  noise.odometry_jitter = w.cwiseMax(0.0).cwiseSqrt();
 }
 
 // Samples y against the summed model variance x of the drift fit y = s x + b x^2.
@@ -232,7 +265,7 @@ PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const
   check(method.size() == odometry.size() && method.size() >= 5,
         "estimate_pose_stream_noise: two streams of the same length, at least 5 poses");
   PoseStreamNoise noise;
-  estimate_jitter(method, odometry, config.trim_quantile, noise);
+  estimate_jitter(method, odometry, config.trim_quantile, config.jitter_confidence, noise);
   const Eigen::Vector3d white = squared(noise.method_jitter) + squared(noise.odometry_jitter);
 
   // The odometry's drift (header, 2): cumulative model variances along the increments.

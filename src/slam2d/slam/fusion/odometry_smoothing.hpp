@@ -26,6 +26,9 @@
 //    or a scale error of a few percent would pass the robot's own accelerations off as noise.
 //    Translation is taken as isotropic (the mean of x's and y's variances): apart, the lateral
 //    jitter of a stream could come out near 0 where the robot's change of velocity hides it.
+//    Where that change dwarfs the noises (scans far apart) R is a small difference of large sums:
+//    R is taken at its lower confidence bound, jitter_confidence jackknife standard errors (20
+//    contiguous blocks) below the estimate, so that an unsure estimate leaves the method's poses.
 // 2. The odometry's drift: the disagreement of the two streams over k scans (k = 1, 2, 3, 4, 6, 8,
 //    12, 16), less the white part 2 (R + W), against the sum of the motion noise model's variances
 //    along those k increments (core/motion_fusion.hpp, unscaled): a scale s times that sum plus a
@@ -60,6 +63,7 @@ struct OdometrySmoothingConfig {
   bool enabled = true;
   double gate_chi2 = kMotionGateChi2;  // 1, the chi-square gate of the step test and the update
   double trim_quantile = 0.99;         // 1, the hat's samples kept by |l - o|
+  double jitter_confidence = 2.0;      // jackknife standard errors taken off the method's jitter
   double min_scale = 0.05;             // 1, lower bound of the odometry drift's scale s
   double max_scale = 100.0;            // 1, upper bound
   std::size_t min_poses = 50;          // fewer: the poses are left as they are
@@ -71,6 +75,8 @@ void describe(Fields& f, OdometrySmoothingConfig& c) {
   f.flag("enabled", c.enabled, "smooth the method's per-scan poses with the odometry (false: the method's poses)");
   f.number("gate_chi2", c.gate_chi2, "1", greater_than(0), "chi-square gate (3 degrees of freedom) of the step test and the update");
   f.number("trim_quantile", c.trim_quantile, "1", between(0.5, 1), "quantile of |l - o| kept when the jitters are estimated");
+  f.number("jitter_confidence", c.jitter_confidence, "1", at_least(0),
+           "standard errors (jackknife over 20 blocks) taken off the method's jitter: unsure, leave its poses");
   f.number("min_scale", c.min_scale, "1", greater_than(0), "lower bound of the odometry drift's scale");
   f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound of the odometry drift's scale");
   f.number("min_poses", c.min_poses, "1", at_least(5), "shorter runs are left as they are");
