@@ -40,6 +40,7 @@
 #include "slam2d/sim/route_follower.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/fusion/discontinuity_smoothing.hpp"
+#include "slam2d/slam/fusion/odometry_smoothing.hpp"
 #include "slam2d/slam/fusion/trajectory_fusion.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/graph/keyframes.hpp"
@@ -202,7 +203,8 @@ using Configs = ::testing::Types<
     RouteFollowerConfig, SimulationConfig, AteConfig, RpeConfig, RelationErrorConfig, GlobalSearchConfig,
     LocalizationStatusConfig, OdometryMotionConfig, BeamModelConfig, MarkovGridConfig, EkfConfig, MclConfig, HybridConfig,
     KeyframeConfig, DriftModel, LargeClosureConfig, LoopClosureConfig, GraphSlamConfig, HectorSlamConfig,
-    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig, DiscontinuitySmoothingConfig, FusionConfig, InputLimits>;
+    RbpfMotionNoise, RbpfProposalConfig, RbpfConfig, DiscontinuitySmoothingConfig, FusionConfig, OdometrySmoothingConfig,
+    InputLimits>;
 TYPED_TEST_SUITE(EveryConfigTable, Configs);
 
 TYPED_TEST(EveryConfigTable, DefaultsPassAndTheirYamlReadsBack) {
