@@ -403,7 +403,7 @@ MappingRun run_chain(const MapJobOptions& options) {
 // The method's per-scan poses smoothed with the odometry they came with (slam/fusion/
 // odometry_smoothing.hpp), and what it found into the summary. Only an odometry that is a sensor
 // of its own (the log's, a trajectory file's): Hector's, the laser's, would share the method's errors.
-void smooth_with_odometry(MappingRun& run, const MapJobOptions& options) {
+void smooth_run_with_odometry(MappingRun& run, const MapJobOptions& options) {
   OdometrySmoothingConfig config;
   config.enabled = options.odometry_smoothing;
   const std::vector<SE2> method = poses_of(run.trajectory);
@@ -437,7 +437,7 @@ MappingRun run_method(const MapJobOptions& options) {
   const OdometryFeed feed = resolve_odometry_feed(options, source, hector);
   MappingRun run = run_method(options.method, options, feed);
   const bool own_sensor = feed.kind == OdometryFeed::Kind::kLog || feed.kind == OdometryFeed::Kind::kTrajectory;
-  if (options.method != "odometry" && own_sensor) smooth_with_odometry(run, options);
+  if (options.method != "odometry" && own_sensor) smooth_run_with_odometry(run, options);
   run.method_summary.add("odometry_source", source);
   if (hector) run.method_summary.add("hector_cpu_s", hector->cpu_s).add("hector_jumps_smoothed", hector->jumps);
   return run;

@@ -13,6 +13,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/jackknife.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/rng.hpp"
@@ -214,6 +215,21 @@ TEST(Rng, SplitStreamsAreIndependentAndReproducible) {
   const double x = a1.uniform();
   EXPECT_EQ(x, b1.uniform());
   EXPECT_NE(x, a2.uniform());
+}
+
+// For the sample mean the jackknife standard error is exactly the textbook s / sqrt(n), with s the
+// sample standard deviation (n - 1 in the denominator): e_i = (n mean - x_i) / (n - 1).
+TEST(Jackknife, OfTheMeanIsTheStandardErrorOfTheMean) {
+  const std::vector<double> x{0.3, -1.2, 2.5, 0.9, 4.1, -0.7, 1.6};
+  const auto n = static_cast<double>(x.size());
+  double mean = 0.0;
+  for (const double v : x) mean += v / n;
+  double ss = 0.0;
+  for (const double v : x) ss += (v - mean) * (v - mean);
+  std::vector<double> leave_one_out;
+  for (const double v : x) leave_one_out.push_back((n * mean - v) / (n - 1.0));
+  EXPECT_NEAR(slam2d::jackknife_standard_error(leave_one_out), std::sqrt(ss / (n - 1.0) / n), 1e-12);
+  EXPECT_EQ(slam2d::jackknife_standard_error(std::vector<double>{1.0}), 0.0);
 }
 
 TEST(Errors, ParseErrorNamesFileAndLine) {

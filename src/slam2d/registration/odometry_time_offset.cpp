@@ -8,6 +8,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/jackknife.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/number_text.hpp"
 #include "slam2d/core/odometry_chain.hpp"
@@ -186,11 +187,7 @@ double jackknife_error(const CostCurves& curves) {
     if (!estimate) return std::numeric_limits<double>::infinity();
     estimates.push_back(*estimate);
   }
-  const auto n = static_cast<double>(estimates.size());
-  double mean = 0.0, spread = 0.0;
-  for (double e : estimates) mean += e / n;
-  for (double e : estimates) spread += (e - mean) * (e - mean);
-  return std::sqrt((n - 1.0) / n * spread);
+  return jackknife_standard_error(estimates);
 }
 
 // The cost at the grid's offset nearest to `offset`.

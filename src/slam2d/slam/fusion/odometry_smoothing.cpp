@@ -9,6 +9,7 @@
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/jackknife.hpp"
 
 namespace slam2d {
 
@@ -124,14 +125,15 @@ void estimate_jitter(const std::vector<SE2>& method, const std::vector<SE2>& odo
   const auto [r, w] = variances(all);
   // The jackknife over the blocks: where the robot's change of velocity between two scans dwarfs
   // the noises (low scan rates), the differences above are small differences of large sums.
-  Eigen::Vector3d r_spread = Eigen::Vector3d::Zero();
+  std::array<std::vector<double>, 3> leave_one_out;
   for (const Sums& b : blocks) {
     Sums rest = all;
     rest.ll -= b.ll, rest.oo -= b.oo, rest.lo -= b.lo, rest.count -= b.count;
-    r_spread += (variances(rest).first - r).cwiseAbs2();
+    const Eigen::Vector3d r_rest = variances(rest).first;
+    for (int axis = 0; axis < 3; ++axis) leave_one_out[axis].push_back(r_rest[axis]);
   }
-  const double factor = static_cast<double>(kBlocks - 1) / static_cast<double>(kBlocks);
-  const Eigen::Vector3d r_error = (factor * r_spread).cwiseSqrt();
+  Eigen::Vector3d r_error;
+  for (int axis = 0; axis < 3; ++axis) r_error[axis] = jackknife_standard_error(leave_one_out[axis]);
   // The method's jitter at its lower confidence bound: where the estimate is unsure, the method's
   // poses are left more as they are (do no harm).
   noise.method_jitter = (r - confidence * r_error).cwiseMax(0.0).cwiseSqrt();
@@ -252,33 +254,34 @@ std::vector<Eigen::Vector3d> rts_smoother(const std::vector<SE2>& method, const 
   return smoothed;
 }
 
-}  // namespace
-
-void validate(const OdometrySmoothingConfig& config) {
-  check_fields(config, "OdometrySmoothingConfig");
-  check(config.min_scale <= config.max_scale, "OdometrySmoothingConfig: min_scale must be <= max_scale");
-  validate(config.odometry_noise);
+// The motion noise model's variances (x, y, theta) of each odometry increment i-1 -> i (entry 0
+// zero), before the scales the data give them: the model's form without its online learning.
+std::vector<Eigen::Vector3d> model_variances(const std::vector<SE2>& odometry, const OdometryNoiseConfig& config) {
+  OdometryNoiseConfig form = config;
+  form.window = 0.0;
+  const OdometryNoiseModel model(form);
+  std::vector<Eigen::Vector3d> variances(odometry.size(), Eigen::Vector3d::Zero());
+  for (std::size_t i = 1; i < odometry.size(); ++i) {
+    const Covariance3 q = model.covariance(odometry[i - 1].between(odometry[i]));
+    variances[i] = Eigen::Vector3d(q(0, 0), q(1, 1), q(2, 2));
+  }
+  return variances;
 }
 
-PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
-                                           const OdometrySmoothingConfig& config) {
-  check(method.size() == odometry.size() && method.size() >= 5,
-        "estimate_pose_stream_noise: two streams of the same length, at least 5 poses");
+// estimate_pose_stream_noise (header), given the model's variances of each increment.
+PoseStreamNoise estimate_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                               const std::vector<Eigen::Vector3d>& model, const OdometrySmoothingConfig& config) {
   PoseStreamNoise noise;
   estimate_jitter(method, odometry, config.trim_quantile, config.jitter_confidence, noise);
   const Eigen::Vector3d white = squared(noise.method_jitter) + squared(noise.odometry_jitter);
 
   // The odometry's drift (header, 2): cumulative model variances along the increments.
-  OdometryNoiseConfig form = config.odometry_noise;
-  form.window = 0.0;
-  const OdometryNoiseModel model(form);
   const std::size_t n = method.size();
   std::vector<double> translation_sum(n, 0.0);
   std::vector<double> rotation_sum(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) {
-    const Covariance3 q = model.covariance(odometry[i - 1].between(odometry[i]));
-    translation_sum[i] = translation_sum[i - 1] + q(0, 0);
-    rotation_sum[i] = rotation_sum[i - 1] + q(2, 2);
+    translation_sum[i] = translation_sum[i - 1] + model[i].x();
+    rotation_sum[i] = rotation_sum[i - 1] + model[i].z();
   }
   GrowthSamples translation, rotation;
   for (const std::size_t k : kLags) {
@@ -293,6 +296,21 @@ PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const
   noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
   noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
   return noise;
+}
+
+}  // namespace
+
+void validate(const OdometrySmoothingConfig& config) {
+  check_fields(config, "OdometrySmoothingConfig");
+  check(config.min_scale <= config.max_scale, "OdometrySmoothingConfig: min_scale must be <= max_scale");
+  validate(config.odometry_noise);
+}
+
+PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                           const OdometrySmoothingConfig& config) {
+  check(method.size() == odometry.size() && method.size() >= 5,
+        "estimate_pose_stream_noise: two streams of the same length, at least 5 poses");
+  return estimate_noise(method, odometry, model_variances(odometry, config.odometry_noise), config);
 }
 
 std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
@@ -314,13 +332,11 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
     out.skipped = "fewer poses than min_poses";
     return method;
   }
-  const PoseStreamNoise noise = estimate_pose_stream_noise(method, odometry, config);
+  const std::vector<Eigen::Vector3d> model = model_variances(odometry, config.odometry_noise);
+  const PoseStreamNoise noise = estimate_noise(method, odometry, model, config);
   out.noise = noise;
   const Eigen::Vector3d jitter = squared(noise.method_jitter).cwiseMax(kMinJitterVariance);
   const Eigen::Vector3d odometry_white = squared(noise.odometry_jitter);
-  OdometryNoiseConfig form = config.odometry_noise;
-  form.window = 0.0;
-  const OdometryNoiseModel model(form);
   const std::size_t n = method.size();
   // The odometry's covariance per step, and the steps cut from the chain: the odometry's increment
   // against the method's own, beyond the gate.
@@ -328,10 +344,9 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
   std::vector<bool> cut(n, false);
   for (std::size_t i = 1; i < n; ++i) {
     const SE2 u = odometry[i - 1].between(odometry[i]);
-    const Covariance3 q = model.covariance(u);
-    Q[i] = Eigen::Vector3d(noise.translation_scale * q(0, 0) + 2.0 * odometry_white.x(),
-                           noise.translation_scale * q(1, 1) + 2.0 * odometry_white.y(),
-                           noise.rotation_scale * q(2, 2) + 2.0 * odometry_white.z());
+    Q[i] = Eigen::Vector3d(noise.translation_scale * model[i].x() + 2.0 * odometry_white.x(),
+                           noise.translation_scale * model[i].y() + 2.0 * odometry_white.y(),
+                           noise.rotation_scale * model[i].z() + 2.0 * odometry_white.z());
     const Eigen::Vector3d step = minus(relative(method[i - 1], method[i]), u.vector());
     const double step_m2 = step.cwiseProduct(step).cwiseQuotient(Q[i] + 2.0 * jitter).sum();
     if (!std::isfinite(step_m2) || step_m2 > config.gate_chi2) {
