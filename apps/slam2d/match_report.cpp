@@ -46,12 +46,14 @@ JsonObject degeneracy_json(const MatchResult& match) {
 std::string covariance_csv_header() {
   return "index,stamp,status,x,y,theta,converged,iterations,inliers,residual,"
          "cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,sigma_trans,sigma_theta,"
-         "degenerate,eigenvalue_ratio,min_eigenvalue,weak_x,weak_y,weak_theta\n";
+         "degenerate,eigenvalue_ratio,min_eigenvalue,weak_x,weak_y,weak_theta,target\n";
 }
 
-std::string covariance_csv_row(std::size_t index, double stamp, const std::string& status, const MatchResult* match) {
+std::string covariance_csv_row(std::size_t index, double stamp, const std::string& status, const MatchResult* match,
+                               std::optional<std::size_t> target) {
   std::string row = fmt::format("{},{},{}", index, stamp, status);
-  if (match == nullptr) return row + std::string(21, ',') + "\n";
+  const std::string target_cell = target ? fmt::format(",{}\n", *target) : std::string(",\n");
+  if (match == nullptr) return row + std::string(21, ',') + target_cell;
   const MatchResult& m = *match;
   const Covariance3& c = m.covariance;
   const double nan = std::nan("");
@@ -59,9 +61,9 @@ std::string covariance_csv_row(std::size_t index, double stamp, const std::strin
                      m.converged ? 1 : 0, m.iterations, m.inliers, m.residual);
   row += fmt::format(",{},{},{},{},{},{},{},{}", c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2),
                      translation_sigma(c), rotation_sigma(c));
-  row += fmt::format(",{:d},{},{},{},{},{}\n", m.degenerate ? 1 : 0, cell(eigenvalue_ratio(m).value_or(nan)),
+  row += fmt::format(",{:d},{},{},{},{},{}", m.degenerate ? 1 : 0, cell(eigenvalue_ratio(m).value_or(nan)),
                      cell(m.information_eigenvalues.x()), m.weak_direction.x(), m.weak_direction.y(), m.weak_direction.z());
-  return row;
+  return row + target_cell;
 }
 
 }  // namespace slam2d::cli

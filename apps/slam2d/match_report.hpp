@@ -27,7 +27,10 @@ JsonObject degeneracy_json(const MatchResult& match);
 
 /// The per-scan CSV of odometry --covariance-csv: its header line, and one row. `status` is
 /// first | matched | failed | too_few_points; without a match the match's columns stay empty.
+/// `target` is the index of the keyframe scan the scan was matched against (empty without a match):
+/// the rows whose index is a later row's target are the keyframe chain the trajectory is built on.
 std::string covariance_csv_header();
-std::string covariance_csv_row(std::size_t index, double stamp, const std::string& status, const MatchResult* match);
+std::string covariance_csv_row(std::size_t index, double stamp, const std::string& status, const MatchResult* match,
+                               std::optional<std::size_t> target = std::nullopt);
 
 }  // namespace slam2d::cli

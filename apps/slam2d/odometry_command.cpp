@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // slam2d odometry LOG --matcher NAME --out TRAJ: scan-to-scan odometry over a whole log with any
 // matcher (registration/scan_odometry.hpp), one trajectory line per front-laser scan; with
-// --covariance-csv FILE also each scan's match: its covariance and degeneracy (match_report.hpp).
+// --covariance-csv FILE also each scan's match: its covariance and degeneracy, and the keyframe it
+// was matched against (match_report.hpp).
 
 #include <fmt/core.h>
 
@@ -85,7 +86,8 @@ class CovarianceRecord {
     }
     const MatchResult match =
         match_between_robots(odometry.last_match(), odometry.last_target_T_robot_sensor(), scan.T_robot_sensor);
-    csv_ += covariance_csv_row(index, scan.stamp, odometry.last_accepted() ? "matched" : "failed", &match);
+    csv_ += covariance_csv_row(index, scan.stamp, odometry.last_accepted() ? "matched" : "failed", &match,
+                               odometry.last_target_index());
     if (match.degenerate) ++degenerate_;
     if (odometry.last_accepted()) {
       trans_sigmas_.push_back(translation_sigma(match.covariance));
@@ -184,7 +186,7 @@ void add_odometry_command(CLI::App& app) {
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
   command->add_option("--covariance-csv", options->covariance_csv,
                       "CSV, one row per scan: its match against the keyframe (pose, covariance, degeneracy and its "
-                      "measure, in the keyframe's robot frame)");
+                      "measure, in the keyframe's robot frame) and that keyframe's scan index (target)");
   command->add_option("--keyframe", options->keyframe,
                       "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
   command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "slam2d/core/angles.hpp"
 #include "slam2d/io/carmen_log.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/sim/simulator.hpp"
@@ -191,7 +192,8 @@ TempDir* CovarianceCliTest::dir_ = nullptr;
 
 // Column indices of the CSV (covariance_csv_header).
 enum Column { kIndex, kStamp, kStatus, kX, kY, kTheta, kConverged, kIterations, kInliers, kResidual, kXX, kXY, kXT, kYY,
-              kYT, kTT, kSigmaTrans, kSigmaTheta, kDegenerate, kRatio, kMinEigenvalue, kWeakX, kWeakY, kWeakTheta, kColumns };
+              kYT, kTT, kSigmaTrans, kSigmaTheta, kDegenerate, kRatio, kMinEigenvalue, kWeakX, kWeakY, kWeakTheta, kTarget,
+              kColumns };
 
 TEST_F(CovarianceCliTest, CorridorIsDegenerateAlongItsAxisWithTheLargerVarianceThere) {
   const Run run = odometry(corridor_log(), "corridor");
@@ -257,6 +259,53 @@ TEST_F(CovarianceCliTest, RoomWithCornersIsNotDegenerate) {
   ASSERT_TRUE(sigma_p95);
   EXPECT_GE(*sigma_p95, *sigma);
   EXPECT_TRUE(json_number(run.result.output, "sigma_theta_median_deg"));
+}
+
+// The target column names the keyframe each scan was matched against: an accepted match (the
+// default runs without fusion) places its scan at the target's pose composed with the match, so
+// the column and the match's pose rebuild the written trajectory; keyframes only move forward.
+TEST_F(CovarianceCliTest, TargetColumnAndMatchRebuildTheTrajectory) {
+  const Run run = odometry(room_log(), "room_chain");
+  ASSERT_EQ(run.result.exit_code, 0) << run.result.errors;
+  const Trajectory trajectory = read_trajectory(dir_->file("room_chain.txt"));
+  ASSERT_EQ(run.csv.size(), trajectory.size() + 1);
+  EXPECT_EQ(run.csv[0].back(), "target");
+  EXPECT_EQ(run.csv[1][kTarget], "");  // the first scan is matched against nothing
+  std::size_t checked = 0, previous_target = 0;
+  std::vector<std::size_t> targets;
+  for (std::size_t k = 2; k < run.csv.size(); ++k) {
+    const std::vector<std::string>& row = run.csv[k];
+    ASSERT_EQ(row.size(), static_cast<std::size_t>(kColumns)) << k;
+    if (row[kStatus] != "matched") continue;
+    const std::size_t index = std::stoul(row[kIndex]), target = std::stoul(row[kTarget]);
+    ASSERT_LT(target, index);
+    EXPECT_GE(target, previous_target) << k;
+    previous_target = target;
+    targets.push_back(target);
+    const SE2 match(std::stod(row[kX]), std::stod(row[kY]), std::stod(row[kTheta]));
+    const SE2 rebuilt = trajectory[target].pose * match;
+    EXPECT_NEAR(rebuilt.x(), trajectory[index].pose.x(), 1e-9) << k;
+    EXPECT_NEAR(rebuilt.y(), trajectory[index].pose.y(), 1e-9) << k;
+    EXPECT_NEAR(angle_difference(rebuilt.theta(), trajectory[index].pose.theta()), 0.0, 1e-9) << k;
+    ++checked;
+  }
+  ASSERT_GT(checked, 300u);
+  // Keyframes (0.1 m / 10 deg apart by default) are fewer than the scans, more than one.
+  std::sort(targets.begin(), targets.end());
+  const auto keyframes = static_cast<std::size_t>(std::unique(targets.begin(), targets.end()) - targets.begin());
+  EXPECT_GT(keyframes, 10u);
+  EXPECT_LT(keyframes, checked);
+  // Every scan a keyframe: each is matched against the one before.
+  const std::string csv = dir_->file("room_every_cov.csv");
+  const CommandResult every = run_command(slam2d("odometry --quiet " + room_log() + " --keyframe 0 --out " +
+                                                 dir_->file("room_every.txt") + " --covariance-csv " + csv));
+  ASSERT_EQ(every.exit_code, 0) << every.errors;
+  const auto rows = read_csv(csv);
+  ASSERT_GT(rows.size(), 300u);
+  for (std::size_t k = 2; k < rows.size(); ++k) {
+    if (rows[k][kStatus] != "matched" && rows[k][kStatus] != "failed") continue;
+    EXPECT_EQ(std::stoul(rows[k][kTarget]), std::stoul(rows[k][kIndex]) - 1) << k;
+  }
 }
 
 TEST_F(CovarianceCliTest, MatchRecoversTheTrueRelativePose) {

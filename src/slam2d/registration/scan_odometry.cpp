@@ -120,7 +120,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   }
   if (!keyframe_) {  // the first scan fixes the world frame
     const SE2 pose = odom_pose.value_or(SE2());
-    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose};
+    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose, stats_.scans - 1};
     if (odom_pose) guarded_previous_ = guarded_moved_ = *odom_pose;
     ++stats_.keyframes;
     T_world_previous_ = pose;
@@ -134,6 +134,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   last_matched_ = cloud.size() >= 3;
   if (last_matched_) {
     last_target_T_robot_sensor_ = keyframe_->T_robot_sensor;
+    last_target_index_ = keyframe_->index;
     const SE2 guess_sensor = keyframe_->T_robot_sensor.inverse() * guess * scan.T_robot_sensor;
     const auto start = std::chrono::steady_clock::now();
     last_match_ = matcher_(keyframe_->cloud, cloud, guess_sensor);
@@ -163,7 +164,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
                      std::abs(T_keyframe_robot.theta()) >= config_.keyframe_angle;
   const bool lost = !last_accepted_ && cloud.size() >= 3;
   if (moved || lost) {
-    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, guarded};
+    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, guarded, stats_.scans - 1};
     ++stats_.keyframes;
   }
   return pose;

@@ -130,6 +130,9 @@ class ScanOdometry {
   /// T_robot_sensor of the keyframe the last matched scan was matched against (the match's target):
   /// with it, match_between_robots(last_match(), ..., scan.T_robot_sensor) is the keyframe-to-scan estimate.
   const SE2& last_target_T_robot_sensor() const { return last_target_T_robot_sensor_; }
+  /// The index (0-based, in the order add() was called) of the keyframe scan the last matched scan
+  /// was matched against: consecutive keyframes chain the trajectory, so their matches carry its drift.
+  std::size_t last_target_index() const { return last_target_index_; }
   const ScanOdometryConfig& config() const { return config_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
   const OdometryNoiseModel& odometry_noise() const { return odometry_noise_; }
@@ -140,6 +143,7 @@ class ScanOdometry {
     SE2 T_world_robot;
     SE2 T_robot_sensor;
     std::optional<SE2> odom_pose;
+    std::size_t index = 0;        // of the scan, in the order add() was called
   };
 
   PointCloud2 usable_cloud(const LaserScan& scan) const;
@@ -168,6 +172,7 @@ class ScanOdometry {
   bool last_accepted_ = false;
   bool last_matched_ = false;
   SE2 last_target_T_robot_sensor_;
+  std::size_t last_target_index_ = 0;
 };
 
 }  // namespace slam2d
