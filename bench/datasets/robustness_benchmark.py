@@ -28,7 +28,11 @@ odometry is degraded with the injector (DEGRADE below: wheel-scale + heading-dri
 methods run on the degraded log, and
     slam2d eval TRAJ --reference REF --json
 gives ATE and RPE against REF, the corrected poses written as 'stamp x y theta'. The row
-'odometry' is the degraded odometry itself. Logs whose FLASER stamps are not strictly increasing
+'odometry' is the degraded odometry itself. With --faults given, each fault at each severity is
+injected into the degraded log as well (`perturb DEGRADED --fault SPEC`), and every run is scored
+with `--rpe-window time --rpe-delta 10`: the do-no-harm table of issue 40, where a method's RPE
+over 10 s windows is set against the odometry's on the same log, and its ATE against its own ATE
+on the degraded log without the fault. Logs whose FLASER stamps are not strictly increasing
 (belgioioso: printed with 6 significant digits, so all equal; freiburg-campus and orebro: all 0)
 get the scan index as the stamp, in both the reduced log and REF; there, the fault windows count
 scans, not seconds ('every=60' is every 60 scans).
@@ -335,7 +339,8 @@ def odometry_trajectory(log_path, out):
                 trajectory.write(f"{tokens[n + 8]} {tokens[n + 5]} {tokens[n + 6]} {tokens[n + 7]}\n")
 
 
-def corrected_benchmark(args):
+def corrected_benchmark(args, faults):
+    """faults: [] for the degradation alone, else the (fault, severity) pairs injected on top of it."""
     work = os.path.join(args.out, "corrected")
     os.makedirs(work, exist_ok=True)
     index_stamps = {}
@@ -356,10 +361,27 @@ def corrected_benchmark(args):
                 first = f.readline().split()
             localization[name] = {"map": os.path.join(map_dir, "map.yaml"), "initial": ",".join(first[1:4]), "extra": []}
 
+    conditions = ["clean", "degraded"] + [f"{fault}-{severity}" for fault, severity in faults]
+    spec_of = {f"{fault}-{severity}": FAULTS[fault][SEVERITIES.index(severity)] for fault, severity in faults}
+    def inject(name, condition):
+        """None, or why the fault does not apply to this log (e.g. far returns beyond a 10 m scanner's range)."""
+        try:
+            perturb(args, os.path.join(work, f"{name}_degraded.clf"), [spec_of[condition]], os.path.join(work, f"{name}_{condition}.clf"))
+            return None
+        except RuntimeError as failure:
+            return str(failure).split(": ", 1)[-1].strip()
+
+    cases = [(name, condition) for name in args.logs for condition in spec_of]
+    inapplicable = {case: reason for case, reason in zip(cases, parallel(args, inject, cases)) if reason}
+    # Scored on 10 s windows where faults are asked for (the do-no-harm table), else on 1 m of travel.
+    rpe = ["--rpe-window", "time", "--rpe-delta", "10"] if faults else []
+
     def run(name, condition, method):
-        log = os.path.join(work, f"{name}.clf" if condition == "clean" else f"{name}_degraded.clf")
-        reference = ["--reference", os.path.join(work, f"{name}.ref.txt")]
-        out_dir = os.path.join(args.out, "runs", f"corrected_{method}_{name}_{condition}")
+        if (name, condition) in inapplicable:
+            return {"error": None, "failure": "not applicable: " + inapplicable[name, condition], "command": ""}
+        log = os.path.join(work, f"{name}.clf" if condition == "clean" else f"{name}_{condition}.clf")
+        reference = ["--reference", os.path.join(work, f"{name}.ref.txt"), *rpe]
+        out_dir = os.path.join(args.out, "runs", f"corrected_{method}_{name}_{condition}" + ("_rpe10s" if faults else ""))
         if method == "odometry":
             os.makedirs(out_dir, exist_ok=True)
             trajectory = os.path.join(out_dir, "trajectory.txt")
@@ -367,13 +389,15 @@ def corrected_benchmark(args):
             return {"error": run_json([args.slam2d, "eval", trajectory, *reference, "--json"]), "command": "(input odometry)"}
         return run_method(args, method, log, out_dir, reference, localization=localization.get(name))
 
-    runs = [(name, condition, method) for name in args.logs for condition in ("clean", "degraded")
+    runs = [(name, condition, method) for name in args.logs for condition in conditions
             for method in ["odometry"] + args.methods]
     rows = []
     for (name, condition, method), result in zip(runs, parallel(args, run, runs)):
         error = result["error"] or {}
-        rows.append({"log": name, "condition": condition, "method": method, "index_stamps": index_stamps[name],
+        rows.append({"log": name, "condition": condition, "spec": spec_of.get(condition, ""), "method": method,
+                     "index_stamps": index_stamps[name],
                      "ate_rmse_m": error.get("ate_rmse"), "rpe_trans_rmse_m": error.get("rpe_trans_rmse"),
+                     "rpe_trans_mean_m": error.get("rpe_trans_mean"), "rpe_delta_s": error.get("rpe_delta_s"),
                      "rpe_rot_rmse_deg": error.get("rpe_rot_rmse_deg"), "matched": error.get("matched"),
                      "converged_at_s": result.get("converged_at_s"),
                      "failure": result.get("failure"), "command": result["command"]})
@@ -393,6 +417,42 @@ def print_corrected_table(rows):
         name = r["log"] + (" (index stamps)" if r["index_stamps"] else "")
         print(f"| {name} | {r['method']} | {fmt(clean['ate_rmse_m'])} | {fmt(r['ate_rmse_m'])}"
               f" | {fmt(r['rpe_trans_rmse_m'])} | {fmt(r['rpe_rot_rmse_deg'], 2)} |")
+
+
+def print_harm_table(rows, methods):
+    """Per log and condition: the odometry's and each method's RPE over 10 s windows / ATE (m);
+    bold where the method's RPE is above the odometry's; the ATE's ratio to the method's on the
+    degraded log without the fault."""
+    print(f"degradation: {' then '.join(DEGRADE)}, then the condition's fault; RPE over 10 s windows (10 scans"
+          " where the stamps are the index) / ATE (m); in brackets ATE / ATE without the fault")
+    print()
+    print("| log | condition | odometry | " + " | ".join(methods) + " |")
+    print("|---|---|---|" + "---|" * len(methods))
+    by_key = {(r["log"], r["condition"], r["method"]): r for r in rows}
+    harmed = cells = 0
+    for r in rows:
+        if r["method"] != "odometry" or r["condition"] == "clean":
+            continue
+        odometry = r["rpe_trans_mean_m"]
+        name = r["log"] + (" (index stamps)" if r["index_stamps"] else "")
+        condition = f"`{r['spec']}`" if r["spec"] else r["condition"]
+        if (r["failure"] or "").startswith("not applicable"):
+            print(f"| {name} | {condition} | {r['failure']} |" + " |" * len(methods))
+            continue
+        cells_text = []
+        for method in methods:
+            m = by_key[r["log"], r["condition"], method]
+            base = by_key[r["log"], "degraded", method]["ate_rmse_m"]
+            if m["rpe_trans_mean_m"] is None:
+                cells_text.append("failed")
+                continue
+            worse = odometry is not None and m["rpe_trans_mean_m"] > odometry
+            harmed, cells = harmed + worse, cells + 1
+            rpe_text = f"**{fmt(m['rpe_trans_mean_m'], 4)}**" if worse else fmt(m["rpe_trans_mean_m"], 4)
+            cells_text.append(f"{rpe_text} / {fmt(m['ate_rmse_m'])} ({fmt(ratio(m['ate_rmse_m'], base), 2)})")
+        print(f"| {name} | {condition} | {fmt(odometry, 4)} / {fmt(r['ate_rmse_m'])} | " + " | ".join(cells_text) + " |")
+    print()
+    print(f"cells worse than the odometry over 10 s: {harmed} of {cells}")
 
 
 def main():
@@ -418,15 +478,19 @@ def main():
     unknown = [log for log in args.logs if log not in known_logs]
     if unknown:
         parser.error(f"unknown logs {unknown}; choose from {known_logs}")
+    faults_given = args.faults is not None
     args.faults = args.faults or (QUICK["faults"] if args.quick else list(FAULTS))
     args.severities = args.severities or (QUICK["severities"] if args.quick else SEVERITIES)
     args.methods = args.methods or (QUICK["methods"] if args.quick else METHODS)
 
     if args.corrected:
-        rows = corrected_benchmark(args)
+        faults = [(fault, severity) for fault in args.faults for severity in args.severities] if faults_given else []
+        rows = corrected_benchmark(args, faults)
         if args.json:
             json.dump({"degrade": DEGRADE, "seed": args.seed, "results": rows}, sys.stdout, indent=2)
             print()
+        elif faults:
+            print_harm_table(rows, args.methods)
         else:
             print_corrected_table(rows)
         return
