@@ -107,14 +107,14 @@ void HectorSlam::fuse(HectorStep& step) {
   residual_variance_ = step.match.residual * step.match.residual;
   const bool learns = config_.fuse_odometry || config_.prior_from_motion_noise;
   if (!learns || config_.prior != MotionPrior::kOdometry || !odometry_.trusted() || !known) return;
-  const Covariance3 motion = rotate_covariance(odometry_noise_.covariance(odometry_.increment), last_pose_->theta());
+  const Covariance3 predicted = predicted_covariance();
   // The odometry's noise is learnt from the match's motion since the last pose, whose uncertainty
   // is the two poses' (the last one's already counted in the prediction).
   odometry_noise_.observe(odometry_.increment, last_pose_->between(match.value),
                           rotate_covariance(last_covariance_ + match.covariance, -last_pose_->theta()));
   if (!config_.fuse_odometry) return;
   const FusedMotion fused =
-      fuse_motion({step.prediction, last_covariance_ + motion}, match, config_.fusion_gate);
+      fuse_motion({step.prediction, predicted}, match, config_.fusion_gate);
   fusion_stats_.count(fused.outcome);
   step.T_map_robot = fused.value;
   step.covariance = fused.covariance;
@@ -186,15 +186,19 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
   return std::nullopt;
 }
 
+// The odometry prediction's covariance in the map: the last pose's plus the motion noise of this
+// scan's increment (the learnt model's), turned into the map frame.
+Covariance3 HectorSlam::predicted_covariance() const {
+  return last_covariance_ + rotate_covariance(odometry_noise_.covariance(odometry_.increment), last_pose_->theta());
+}
+
 // The Gaussian prior at the odometry prediction; none without odometry or where the guard did not
 // trust this scan's increment, and at a catch-up only if config.prior_at_catch_ups.
 std::optional<PosePrior> HectorSlam::pose_prior(const SE2& prediction) const {
   if (config_.prior_information_translation <= 0.0 && config_.prior_information_rotation <= 0.0) return std::nullopt;
   if (!odometry_trusted() || (odometry_.fault == OdometryFault::kCatchUp && !config_.prior_at_catch_ups)) return std::nullopt;
   if (config_.prior_from_motion_noise && last_pose_ && residual_variance_ > 0.0) {  // s^2 P^-1 (config)
-    const Covariance3 predicted =
-        last_covariance_ + rotate_covariance(odometry_noise_.covariance(odometry_.increment), last_pose_->theta());
-    return PosePrior{.mean = prediction, .information = residual_variance_ * information_from_covariance(predicted),
+    return PosePrior{.mean = prediction, .information = residual_variance_ * information_from_covariance(predicted_covariance()),
                      .kernel = config_.prior_kernel};
   }
   // Translation information 1 / (sigma at rest + growth * distance travelled)^2.

@@ -210,6 +210,7 @@ class HectorSlam {
   SE2 predict(const LaserScan& scan) const;
   double angular_rate(const LaserScan& scan, const HectorInputs& inputs, const SE2& prediction) const;
   void fuse(HectorStep& step);
+  Covariance3 predicted_covariance() const;
   bool needs_map_update(const SE2& T_map_robot) const;
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
 
