@@ -104,23 +104,24 @@ TEST(GraphSlamRealData, ClosesTheLoopsOfAces) {
   EXPECT_LT(slam.odometry_noise().translation_scale(), slam.odometry_noise().config().max_scale);
 }
 
-// Without odometry the tracker drifts 3.6 m around ACES's second large loop; the log cut at
-// 1045 s ends just before the keyframe whose search closes the loop in the full run (back in the
-// corridor of 489 s): only finish()'s search from the last keyframes closes it, a large correction
-// confirmed by a second keyframe (the code before left the end 3.56 m off the reference, measured).
-// The cut was chosen on the run with immediate loop closure; with delayed closure (the default)
-// the estimate differs and the same loop closes a few keyframes earlier (0.67 m measured).
+// Without odometry the tracker drifts 3.6 m around ACES's second large loop; the log is cut at
+// 1045 s, a few seconds after the robot is back in the corridor of 489 s. The loop must close
+// there, a large correction confirmed by a second keyframe (the code before left the end 3.56 m
+// off the reference, measured). The cut was chosen when only finish()'s search from the last
+// keyframes closed it; since the loop match's point-to-line refinement takes a cycle of its pairs
+// for its end (PoseCycle), the keyframes of 1039.5 s and 1041.2 s close and confirm it before
+// the end, and a cut before 1041.2 s leaves it unconfirmed (3.5 m off). finish()'s search alone
+// is tested on the simulated late loop (tests/slam/graph/long_loop_test.cpp).
 TEST(GraphSlamRealData, ClosesALoopAtTheEndOfACutLog) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   GraphSlamConfig immediate;
   immediate.loop_closure.delayed = false;
   const GraphSlam cut = map_log(data / "aces/aces.clf.gz", false, 1045.0, immediate);
-  EXPECT_GE(cut.stats().final_search_closures, 1u);
   EXPECT_GE(cut.stats().large_closures, 1u);
-  EXPECT_LT(end_error(cut.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (1.08 measured)
+  EXPECT_LT(end_error(cut.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (0.91 measured)
   const GraphSlam delayed = map_log(data / "aces/aces.clf.gz", false, 1045.0);
   EXPECT_GE(delayed.stats().large_closures, 1u);
-  EXPECT_LT(end_error(delayed.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (0.67 measured)
+  EXPECT_LT(end_error(delayed.trajectory(), aces_with_odometry(data).trajectory()), 1.5);  // m (0.43 measured)
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "slam2d/core/rng.hpp"
 #include "slam2d/registration/closed_form.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/nearest_association.hpp"
 #include "slam2d/registration/normals.hpp"
 #include "slam2d/registration/pl_icp.hpp"
 #include "support/test_support.hpp"
@@ -263,6 +264,25 @@ TEST(PointToPlane, EmptyTinyOrFarApartCloudsDoNotConverge) {
   const MatchResult clumped = match_point_to_plane(clump, pair.source, SE2());
   EXPECT_FALSE(clumped.converged);
   EXPECT_GE(clumped.covariance.diagonal().minCoeff(), 1e5);
+}
+
+// An iteration that comes back to a pose of its last four has entered a cycle of its
+// associations: the steps would never shrink below the stopping test, so it is over.
+TEST(PoseCycle, AReturnWithinFourIterationsIsACycleAndSteadyProgressIsNot) {
+  constexpr double kTolerance = 1e-4;
+  PoseCycle two;
+  EXPECT_FALSE(two.returned_to(SE2(1.0, 2.0, 0.1), kTolerance, kTolerance));
+  EXPECT_FALSE(two.returned_to(SE2(1.007, 2.0, 0.1), kTolerance, kTolerance));
+  EXPECT_TRUE(two.returned_to(SE2(1.0 + 1e-6, 2.0, 0.1), kTolerance, kTolerance));
+  PoseCycle steady;  // 1 mm a step: slow, but going somewhere
+  for (int k = 0; k < 20; ++k) EXPECT_FALSE(steady.returned_to(SE2(0.001 * k, 0.0, 0.0), kTolerance, kTolerance));
+  PoseCycle five;  // longer than the longest cycle recognised
+  for (int k = 0; k < 5; ++k) EXPECT_FALSE(five.returned_to(SE2(0.01 * k, 0.0, 0.0), kTolerance, kTolerance));
+  EXPECT_FALSE(five.returned_to(SE2(0.0, 0.0, 0.0), kTolerance, kTolerance));
+  PoseCycle turning;  // headings compared across +-pi
+  EXPECT_FALSE(turning.returned_to(SE2(0.0, 0.0, std::numbers::pi - 1e-6), kTolerance, kTolerance));
+  EXPECT_FALSE(turning.returned_to(SE2(0.0, 0.0, std::numbers::pi - 0.01), kTolerance, kTolerance));
+  EXPECT_TRUE(turning.returned_to(SE2(0.0, 0.0, -std::numbers::pi + 1e-6), kTolerance, kTolerance));
 }
 
 TEST(PointToPlane, InvalidConfigsThrow) {

@@ -117,4 +117,12 @@ bool step_below(const SE2& before, const SE2& after, double translation, double 
          std::abs(normalize_angle(after.theta() - before.theta())) < rotation;
 }
 
+bool PoseCycle::returned_to(const SE2& pose, double translation, double rotation) {
+  const std::size_t seen = std::min(count_, kPeriod);
+  const bool returned = std::any_of(recent_.begin(), recent_.begin() + static_cast<std::ptrdiff_t>(seen),
+                                    [&](const SE2& before) { return step_below(before, pose, translation, rotation); });
+  recent_[count_++ % kPeriod] = pose;
+  return returned;
+}
+
 }  // namespace slam2d

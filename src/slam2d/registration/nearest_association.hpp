@@ -7,6 +7,7 @@
 // (closed_form.hpp), and filling a MatchResult from the final correspondences.
 // Internal to the registration module: buffers are the caller's, reused across iterations.
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -68,5 +69,21 @@ MatchResult unmatched(const SE2& T_target_source_guess, int iterations = 0);
 
 /// True when `after` differs from `before` by less than `translation` (m) and `rotation` (rad).
 bool step_below(const SE2& before, const SE2& after, double translation, double rotation);
+
+/// The iteration's poses of the last few steps: an iteration that comes back to one of them has
+/// entered a cycle of the associations (the pairs alternate between sets, so the steps never
+/// shrink below the stopping test), and is at its end, as CSM's loop detection has it.
+class PoseCycle {
+ public:
+  static constexpr std::size_t kPeriod = 4;  // the longest cycle recognised, in iterations
+
+  /// True when `pose` lies within `translation` and `rotation` of one of the last kPeriod poses
+  /// given; `pose` is then remembered.
+  bool returned_to(const SE2& pose, double translation, double rotation);
+
+ private:
+  std::array<SE2, kPeriod> recent_{};
+  std::size_t count_ = 0;
+};
 
 }  // namespace slam2d

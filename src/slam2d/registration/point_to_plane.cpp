@@ -58,6 +58,7 @@ MatchResult match_point_to_plane(const KdTree2& tree, const PointCloud2& target,
   PointToPlaneBuffers buffers;
   MatchResult result;
   SE2 T = T_target_source_guess;
+  PoseCycle cycle;
   for (int k = 0; k < config.max_iterations; ++k) {
     associate(tree, model, source, T, config, buffers.pairs);
     if (buffers.pairs.size() < min_pairs) break;
@@ -69,7 +70,8 @@ MatchResult match_point_to_plane(const KdTree2& tree, const PointCloud2& target,
     if (!increment) break;
     T = *increment * T;
     result.iterations = k + 1;
-    if (step_below(SE2(), *increment, config.min_translation_step, config.min_rotation_step)) {
+    if (step_below(SE2(), *increment, config.min_translation_step, config.min_rotation_step) ||
+        cycle.returned_to(T, config.min_translation_step, config.min_rotation_step)) {
       result.converged = true;
       break;
     }

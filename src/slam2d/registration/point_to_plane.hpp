@@ -7,6 +7,9 @@
 // far pairs and targets without a normal, and solves Low's small-angle linear system for the
 // increment (solve_point_to_plane, closed_form.hpp), applied with the exact rotation. Target
 // normals are the target's own, or estimate_normals (k nearest neighbours) when it has none.
+// It stops when an increment is below the step tolerances or the estimate comes back to one of
+// its last four (a cycle of the pairs, which no further iteration leaves: PoseCycle in
+// nearest_association.hpp, as CSM's loop detection); both count as converged.
 //
 // Preset: configs/point-to-plane.yaml. Method page: docs/methods/icp.md.
 

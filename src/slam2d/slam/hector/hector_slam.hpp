@@ -83,9 +83,9 @@ struct HectorSlamConfig {
   // Off by default. On graph SLAM's tracker (with the Cauchy kernel) it holds ACES with three
   // glass sectors at 0.053 m against 1.00 m and lowers the noisy-laser and mixed-pixel errors on
   // Intel and ACES, at about the clean figures over noise seeds; but graph SLAM then leaves a
-  // simulated 14 m drift and an end-of-log loop open, with or without its odometry edges (which
-  // would count the odometry a second time): the tracker leaves a blind stretch with a drift the
-  // loop closer does not close (docs/fusion_by_uncertainty.md, "The double count, measured").
+  // simulated 14 m drift open, with or without its odometry edges (which would count the odometry
+  // a second time): the tracker leaves a blind stretch with a drift the loop closer does not take
+  // (docs/fusion_by_uncertainty.md, "The double count, measured").
   bool prior_from_motion_noise = false;
   // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
   // retried with a rotation search over every heading, kept when it fits a fifth better. Off with
