@@ -40,6 +40,7 @@ struct OdometryOptions {
   std::string trajectory_format = "text";  // text | tum
   std::optional<double> keyframe;            // m; 0: match every scan against the previous one
   std::optional<double> keyframe_angle_deg;  // deg
+  std::optional<std::size_t> local_map;      // keyframes the scan is matched against
   LogReaderOptions input;                      // CARMEN geometry overrides, bag topics and frames
   bool no_odometry = false;
   std::string odometry_time_offset = "auto";  // auto | off | seconds (sensor_options.hpp)
@@ -60,6 +61,7 @@ ScanOdometryConfig odometry_config(const OdometryOptions& options) {
     if (*options.keyframe == 0.0) config.keyframe_angle = 0.0;
   }
   if (options.keyframe_angle_deg) config.keyframe_angle = deg_to_rad(*options.keyframe_angle_deg);
+  if (options.local_map) config.local_map_keyframes = *options.local_map;
   if (options.input.carmen.geometry.range_max) config.max_range = *options.input.carmen.geometry.range_max;
   validate(config);
   return config;
@@ -190,6 +192,9 @@ void add_odometry_command(CLI::App& app) {
   command->add_option("--keyframe", options->keyframe,
                       "m the robot moves before the next keyframe (default 0.1; 0: match against the previous scan)");
   command->add_option("--keyframe-angle", options->keyframe_angle_deg, "deg the robot turns before the next keyframe (default 10)");
+  command->add_option("--local-map", options->local_map,
+                      "keyframes the scan is matched against, the newest and those before it (default 2; 1: the keyframe alone)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1000}));
   add_sensor_options(command, options->input,
                      "m: readings at or above are dropped (default: 30 for matching, and the reader's no-return "
                      "threshold: the log's PARAM, else 80)");

@@ -164,6 +164,56 @@ TEST(ScanOdometry, RemembersWhichScansWereMatchedAndAgainstWhichMount) {
   EXPECT_TRUE(test::poses_near(odometry.last_target_T_robot_sensor(), second_mount, 0.0, 0.0));  // scan 1, the keyframe
 }
 
+// The world position of every point of a target cloud, moved out of the keyframe's sensor frame.
+std::vector<Point2> in_world(const PointCloud2& target, const SE2& T_world_sensor) {
+  std::vector<Point2> world;
+  for (const Point2& p : target.points) world.push_back(T_world_sensor * p);
+  return world;
+}
+
+TEST(ScanOdometry, TheLocalMapHoldsTheLastKeyframesWhereTheyWereSeen) {
+  const SE2 mount(0.2, 0.05, 0.1);
+  // Scan k sees a circle of radius 3 + 0.1 k around its sensor: each point names its scan.
+  const auto scan = [&](int k) {
+    LaserScan s = flat_scan(0.1 * k, mount);
+    s.ranges.assign(31, 3.0 + 0.1 * k);
+    return s;
+  };
+  const auto odom = [](int k) { return SE2(0.2 * k, 0.03 * k * k, 0.05 * k); };  // a keyframe every scan
+  for (const std::size_t keyframes : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {
+    std::vector<PointCloud2> targets;
+    int call = 0;
+    ScanOdometry odometry(
+        [&](const PointCloud2& target, const PointCloud2&, const SE2& guess) {
+          targets.push_back(target);
+          MatchResult result = accepted(guess);
+          if (++call == 4) result.converged = false;  // scan 4 fails: it starts the local map afresh
+          return result;
+        },
+        {.local_map_keyframes = keyframes});
+    for (int k = 0; k <= 5; ++k) odometry.add(scan(k), odom(k));
+    ASSERT_EQ(targets.size(), 5u);
+    // Scan k (1-based call k) is matched against keyframes k-1, k-2, ... as far as the local map
+    // reaches; after the failure of scan 4, scan 5 sees keyframe 4 alone.
+    for (int k = 1; k <= 5; ++k) {
+      const int newest = k - 1;
+      const int reach = k == 5 ? 1 : std::min<int>(static_cast<int>(keyframes), k);
+      const PointCloud2& target = targets[static_cast<std::size_t>(k - 1)];
+      ASSERT_EQ(target.size(), 31u * static_cast<std::size_t>(reach)) << keyframes << " keyframes, scan " << k;
+      const std::vector<Point2> world = in_world(target, odom(newest) * mount);
+      for (int m = 0; m < reach; ++m) {
+        const SE2 T_world_sensor = odom(newest - m) * mount;  // where scan newest - m was taken
+        for (std::size_t j = 0; j < 31; ++j) {
+          const Point2& p = world[31 * static_cast<std::size_t>(m) + j];
+          // On scan newest - m's circle, around the sensor that saw it.
+          EXPECT_NEAR((p - T_world_sensor.translation()).norm(), 3.0 + 0.1 * (newest - m), 1e-9)
+              << keyframes << " keyframes, scan " << k << ", keyframe " << newest - m;
+        }
+      }
+    }
+  }
+}
+
 // (x, y, theta) of A * T * C for a perturbed T, to differentiate numerically.
 Eigen::Vector3d between_robots_vector(const SE2& A, const Eigen::Vector3d& t, const SE2& C) {
   const SE2 moved = A * SE2(t.x(), t.y(), t.z()) * C;
@@ -205,6 +255,7 @@ TEST(ScanOdometry, InvalidSettingsThrow) {
   const Matcher echo = [](const PointCloud2&, const PointCloud2&, const SE2& guess) { return accepted(guess); };
   EXPECT_THROW(ScanOdometry(Matcher{}), Error);
   EXPECT_THROW(ScanOdometry(echo, {.keyframe_distance = -1.0}), Error);
+  EXPECT_THROW(ScanOdometry(echo, {.local_map_keyframes = 0}), Error);
   EXPECT_THROW(ScanOdometry(echo, {.min_range = 5.0, .max_range = 5.0}), Error);
   EXPECT_THROW(ScanOdometry(echo, {.max_guess_dt = 0.0}), Error);
   EXPECT_THROW(ScanOdometry(echo, {.min_inlier_fraction = 1.5}), Error);

@@ -644,7 +644,14 @@ MatchResult match_pl_icp(const PointCloud2& target, const PointCloud2& source, c
   thread_local TargetIndex t;
   thread_local Workspace ws;
   thread_local std::vector<std::uint64_t> associations;
-  prepare_target(target, config.search, t);
+  // Successive matches against one target (a keyframe, a local map) prepare it once.
+  thread_local std::vector<Point2> prepared_points;
+  thread_local std::optional<PlIcpSearch> prepared_search;
+  if (prepared_search != config.search || prepared_points != target.points) {
+    prepare_target(target, config.search, t);
+    prepared_points = target.points;
+    prepared_search = config.search;
+  }
   if (t.size() < 3 || source.size() < 3) {  // nothing to match: the guess, unconverged, huge covariance
     MatchResult result;
     result.T_target_source = T_target_source_guess;

@@ -57,6 +57,27 @@ PointCloud2 ScanOdometry::usable_cloud(const LaserScan& scan) const {
   return cloud;
 }
 
+// The new keyframe, and the local map the next scans are matched against: its cloud followed by
+// those of the keyframes before it (at most local_map_keyframes in all), each moved into its sensor
+// frame by the poses estimated for them. A keyframe taken because the last one no longer
+// matched starts the local map afresh.
+void ScanOdometry::take_keyframe(Keyframe keyframe, bool keep_local_map) {
+  if (keyframe_ && keep_local_map && config_.local_map_keyframes > 1) {
+    earlier_keyframes_.push_front(std::move(*keyframe_));
+    earlier_keyframes_.resize(std::min(earlier_keyframes_.size(), config_.local_map_keyframes - 1));
+  } else {
+    earlier_keyframes_.clear();
+  }
+  keyframe_ = std::move(keyframe);
+  ++stats_.keyframes;
+  target_ = keyframe_->cloud;
+  const SE2 T_sensor_world = (keyframe_->T_world_robot * keyframe_->T_robot_sensor).inverse();
+  for (const Keyframe& earlier : earlier_keyframes_) {
+    const PointCloud2 moved = transform(earlier.cloud, T_sensor_world * earlier.T_world_robot * earlier.T_robot_sensor);
+    target_.points.insert(target_.points.end(), moved.points.begin(), moved.points.end());
+  }
+}
+
 // The motion from the keyframe to the new scan: odometry when both have it (odom_pose is given
 // only when the guard trusts this scan's increment), else constant velocity.
 SE2 ScanOdometry::predict(double stamp, const std::optional<SE2>& odom_pose) const {
@@ -120,9 +141,8 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   }
   if (!keyframe_) {  // the first scan fixes the world frame
     const SE2 pose = odom_pose.value_or(SE2());
-    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose, stats_.scans - 1};
+    take_keyframe(Keyframe{std::move(cloud), pose, scan.T_robot_sensor, odom_pose, stats_.scans - 1}, false);
     if (odom_pose) guarded_previous_ = guarded_moved_ = *odom_pose;
-    ++stats_.keyframes;
     T_world_previous_ = pose;
     previous_stamp_ = scan.stamp;
     trajectory_.push_back(scan.stamp, pose);
@@ -137,7 +157,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
     last_target_index_ = keyframe_->index;
     const SE2 guess_sensor = keyframe_->T_robot_sensor.inverse() * guess * scan.T_robot_sensor;
     const auto start = std::chrono::steady_clock::now();
-    last_match_ = matcher_(keyframe_->cloud, cloud, guess_sensor);
+    last_match_ = matcher_(target_, cloud, guess_sensor);
     stats_.matcher_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++stats_.matches;
     stats_.total_iterations += static_cast<std::size_t>(std::max(0, last_match_.iterations));
@@ -163,10 +183,7 @@ SE2 ScanOdometry::add(const LaserScan& scan, std::optional<SE2> odom_pose) {
   const bool moved = T_keyframe_robot.translation().norm() >= config_.keyframe_distance ||
                      std::abs(T_keyframe_robot.theta()) >= config_.keyframe_angle;
   const bool lost = !last_accepted_ && cloud.size() >= 3;
-  if (moved || lost) {
-    keyframe_ = Keyframe{std::move(cloud), pose, scan.T_robot_sensor, guarded, stats_.scans - 1};
-    ++stats_.keyframes;
-  }
+  if (moved || lost) take_keyframe(Keyframe{std::move(cloud), pose, scan.T_robot_sensor, guarded, stats_.scans - 1}, !lost);
   return pose;
 }
 

@@ -8,6 +8,17 @@
 // is in docs/defaults.md). Matching against a keyframe instead of the previous scan keeps a slow
 // or standing robot from integrating the matcher's noise.
 //
+// The target is a small local map: the keyframe's cloud followed by those of the
+// local_map_keyframes - 1 keyframes before it, each moved into the keyframe's sensor frame by the
+// poses estimated for them (a keyframe taken because the last one no longer matched starts it
+// afresh). A pair of scans implies a small heading bias of its own, the same from any guess and
+// for every matcher (docs/methods/pl_icp.md, "Why Intel stays near CSM"); summed over thousands
+// of keyframe steps it is the drift. A scan matched against two keyframes at once is held by
+// both, so the steps' biases no longer add up one by one: PL-ICP on Intel 0.946 -> 0.668 m, and
+// 14 of 18 matcher and log pairs lower (docs/defaults.md, "Scan odometry `local_map_keyframes`").
+// Such a target is not in one beam order, so PL-ICP searches it by kd-tree, not projectively:
+// 110 against 47 us per match on Intel.
+//
 // The initial guess is the wheel odometry between the keyframe and the scan when both have it
 // (checked increment by increment: core/odometry_guard.hpp),
 // moved into the sensor frames with each scan's T_robot_sensor; else a constant-velocity
@@ -33,6 +44,7 @@
 // lives in the log's odometry frame), else the first scan's robot frame.
 
 #include <cstddef>
+#include <deque>
 #include <functional>
 #include <optional>
 
@@ -51,6 +63,7 @@ namespace slam2d {
 struct ScanOdometryConfig {
   double keyframe_distance = 0.1;
   double keyframe_angle = 0.17453292519943295;
+  std::size_t local_map_keyframes = 2;
   double min_range = 0.0;
   double max_range = 30.0;
   double max_guess_dt = 1.0;
@@ -76,6 +89,8 @@ template <typename Fields>
 void describe(Fields& f, ScanOdometryConfig& c) {
   f.number("keyframe_distance", c.keyframe_distance, "m", at_least(0), "new keyframe once |t| from it reaches this (0: every scan)");
   f.number("keyframe_angle", c.keyframe_angle, "rad", at_least(0), "... or |theta| reaches this (10 deg; 0: every scan)");
+  f.number("local_map_keyframes", c.local_map_keyframes, "1", at_least(1),
+           "the target is the last this many keyframes' clouds, moved into the newest one's frame (1: the keyframe alone)");
   f.number("min_range", c.min_range, "m", at_least(0), "readings below are dropped");
   f.number("max_range", c.max_range, "m", greater_than(0),
            "> min_range; readings at or beyond are dropped (a SICK LMS is reliable to ~30 m, and logs report no-return as a far reading: 50 m in ACES)");
@@ -161,7 +176,10 @@ class ScanOdometry {
   std::optional<SE2> odometry_correction_;
   SE2 guarded_previous_;  // the guarded odometry pose of the last scan
   SE2 guarded_moved_;     // ... of the last scan whose odometry pose moved
+  void take_keyframe(Keyframe keyframe, bool keep_local_map);
   std::optional<Keyframe> keyframe_;
+  std::deque<Keyframe> earlier_keyframes_;  // the local map's older keyframes, newest first
+  PointCloud2 target_;                      // the local map in the keyframe's sensor frame
   SE2 T_world_previous_;          // the last scan's pose
   double previous_stamp_ = 0.0;   // s
   std::optional<SE2> velocity_;   // the last relative motion (robot frame) per velocity_dt_

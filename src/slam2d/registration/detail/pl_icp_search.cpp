@@ -269,10 +269,21 @@ int projective_closest(const TargetIndex& t, const Point2& p, int hint, double m
   return walk.index;
 }
 
-int kd_tree_closest(const TargetIndex& t, const Point2& p, double max_squared) {
-  const Neighbor nearest = t.tree->nearest(p);
-  if (nearest.index >= t.points.size() || nearest.squared_distance >= max_squared) return kNone;
-  return static_cast<int>(nearest.index);
+// The closest target point by kd-tree, and the certificate of the header: the second closest
+// point's distance (every point's, the closest one's, when that is out of reach).
+int kd_tree_closest(const TargetIndex& t, const Point2& p, double max_squared, double& clearance) {
+  thread_local std::vector<Neighbor> closest;
+  const std::size_t found = t.tree->nearest_k(p, 2, closest);
+  if (found == 0) {
+    clearance = kInfinity;
+    return kNone;
+  }
+  if (closest[0].squared_distance >= max_squared) {
+    clearance = std::sqrt(closest[0].squared_distance);
+    return kNone;
+  }
+  clearance = found > 1 ? std::sqrt(closest[1].squared_distance) : kInfinity;
+  return static_cast<int>(closest[0].index);
 }
 
 }  // namespace
@@ -323,8 +334,7 @@ void prepare_target(const PointCloud2& target, PlIcpSearch search, TargetIndex& 
 int search_and_track(const TargetIndex& t, const Point2& p, double max_distance, TrackedNearest& tracked, int start) {
   tracked.anchor = p;
   if (!t.ordered) {
-    tracked.clearance = 0.0;
-    tracked.index = kd_tree_closest(t, p, max_distance * max_distance);
+    tracked.index = kd_tree_closest(t, p, max_distance * max_distance, tracked.clearance);
   } else {
     const int hint = tracked.index != kNone ? tracked.index : start;
     tracked.index = projective_closest(t, p, hint, max_distance * max_distance, tracked.clearance);

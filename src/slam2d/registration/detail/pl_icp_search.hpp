@@ -12,8 +12,9 @@
 // |p| sin(delta bearing). It is exact: it finds the same j1 as the kd-tree. Bearings are
 // compared as pseudo-angles (monotone in the bearing, a half turn = 2), one division each.
 //
-// Every walk also yields a clearance: a lower bound on the distance from the query to every
-// target point other than j1 (to every point when there is none within reach). Once the
+// Every search also yields a clearance: a lower bound on the distance from the query to every
+// target point other than j1 (to every point when there is none within reach); the kd-tree's is
+// the distance of the second-closest point (of the closest, when it is out of reach). Once the
 // estimate moves by little, a source point whose drift d from where it was last searched
 // satisfies |p - p_j1| < clearance - d keeps j1 without any walk: every other point is at least
 // clearance - d away (triangle inequality). TrackedNearest carries that certificate from one
