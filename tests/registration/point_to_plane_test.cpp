@@ -285,6 +285,27 @@ TEST(PoseCycle, AReturnWithinFourIterationsIsACycleAndSteadyProgressIsNot) {
   EXPECT_TRUE(turning.returned_to(SE2(0.0, 0.0, -std::numbers::pi + 1e-6), kTolerance, kTolerance));
 }
 
+// IDC, IMRP and the tangent search remember two poses: a return after three steps is progress to
+// them, a cycle to the default of four.
+TEST(PoseCycle, ThePeriodBoundsTheCyclesRecognised) {
+  constexpr double kTolerance = 1e-4;
+  const std::vector<SE2> three_cycle = {SE2(0.0, 0.0, 0.0), SE2(0.01, 0.0, 0.0), SE2(0.0, 0.01, 0.0), SE2(0.0, 0.0, 0.0)};
+  PoseCycle period_two(2);
+  PoseCycle period_four;
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_FALSE(period_two.returned_to(three_cycle[k], kTolerance, kTolerance));
+    EXPECT_FALSE(period_four.returned_to(three_cycle[k], kTolerance, kTolerance));
+  }
+  EXPECT_FALSE(period_two.returned_to(three_cycle[3], kTolerance, kTolerance));
+  EXPECT_TRUE(period_four.returned_to(three_cycle[3], kTolerance, kTolerance));
+  PoseCycle alternating(2);  // two sets of pairs taking turns
+  EXPECT_FALSE(alternating.returned_to(SE2(0.0, 0.0, 0.0), kTolerance, kTolerance));
+  EXPECT_FALSE(alternating.returned_to(SE2(0.01, 0.0, 0.0), kTolerance, kTolerance));
+  EXPECT_TRUE(alternating.returned_to(SE2(0.0, 0.0, 0.0), kTolerance, kTolerance));
+  EXPECT_THROW(PoseCycle(0), Error);
+  EXPECT_THROW(PoseCycle(5), Error);
+}
+
 TEST(PointToPlane, InvalidConfigsThrow) {
   const testing::ScanPair pair = make_pair(recovery_cases()[3]);
   const auto run = [&](const PointToPlaneConfig& config) {

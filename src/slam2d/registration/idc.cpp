@@ -30,26 +30,14 @@ double shrinking(double initial, double final_value, double decay, int iteration
   return std::max(final_value, initial * std::exp(-decay * iteration));
 }
 
-bool small_step(const SE2& before, const SE2& after, double translation_tolerance, double rotation_tolerance) {
-  const SE2 step = before.between(after);
-  return step.translation().norm() <= translation_tolerance && std::abs(step.theta()) <= rotation_tolerance;
-}
-
 // The stopping test: the step is below the tolerances, or, once the bounds of Eq. (6) have
-// reached their floors, the iteration came back to the pose of two iterations ago (the
-// correspondences alternate between two sets, as PL-ICP also detects).
-struct Convergence {
-  SE2 before_last;
-  bool has_before_last = false;
-
-  bool reached(const SE2& before, const SE2& after, double translation_tolerance, double rotation_tolerance,
-               bool settled) {
-    const bool cycle = settled && has_before_last && small_step(before_last, after, translation_tolerance, rotation_tolerance);
-    before_last = before;
-    has_before_last = true;
-    return cycle || small_step(before, after, translation_tolerance, rotation_tolerance);
-  }
-};
+// reached their floors, the iteration came back to a pose of the last two (the correspondences
+// alternate between two sets): PoseCycle with a period of two.
+bool converged(const SE2& before, const SE2& after, double translation_tolerance, double rotation_tolerance,
+               bool settled, PoseCycle& cycle) {
+  const bool returned = cycle.returned_to(after, translation_tolerance, rotation_tolerance);
+  return step_below(before, after, translation_tolerance, rotation_tolerance) || (settled && returned);
+}
 
 // ---- The two rules' point pairs ----
 
@@ -576,7 +564,7 @@ MatchResult match_imrp(const PointCloud2& target, const PointCloud2& source, con
   const auto min_pairs = static_cast<std::size_t>(config.min_correspondences);
   SE2 T = T_target_source_guess;
   MatchResult result;
-  Convergence convergence;
+  PoseCycle cycle(2);
   for (int k = 0; k < config.max_iterations; ++k) {
     const double window = shrinking(config.window_initial, config.window_final, config.window_decay, k);  // Eq. (6)
     const PointPairs pairs = matching_range_pairs(polyline, source, T, window, config.max_range_difference);  // Eq. (2)
@@ -584,8 +572,8 @@ MatchResult match_imrp(const PointCloud2& target, const PointCloud2& source, con
     if (!D) return unmatched(T_target_source_guess, k + 1);
     const SE2 next = *D * T;
     result.iterations = k + 1;
-    result.converged = convergence.reached(T, next, config.translation_tolerance, config.rotation_tolerance,
-                                           window == config.window_final);
+    result.converged = converged(T, next, config.translation_tolerance, config.rotation_tolerance,
+                                 window == config.window_final, cycle);
     T = next;
     if (result.converged) break;
   }
@@ -602,7 +590,7 @@ MatchResult match_idc(const PointCloud2& target, const PointCloud2& source, cons
   const auto min_pairs = static_cast<std::size_t>(config.min_correspondences);
   SE2 T = T_target_source_guess;
   MatchResult result;
-  Convergence convergence;
+  PoseCycle cycle(2);
   double max_distance = config.max_distance_initial;
   for (int k = 0; k < config.max_iterations; ++k) {
     const double window = shrinking(config.window_initial, config.window_final, config.window_decay, k);  // Eq. (6)
@@ -613,8 +601,8 @@ MatchResult match_idc(const PointCloud2& target, const PointCloud2& source, cons
     if (closest.size() < min_pairs || !range_motion) return unmatched(T_target_source_guess, k + 1);
     const SE2 next = motion_given_rotation(closest, range_motion->theta()) * T;  // Eq. (5)
     result.iterations = k + 1;
-    result.converged = convergence.reached(T, next, config.translation_tolerance, config.rotation_tolerance,
-                                           window == config.window_final && max_distance == config.max_distance_final);
+    result.converged = converged(T, next, config.translation_tolerance, config.rotation_tolerance,
+                                 window == config.window_final && max_distance == config.max_distance_final, cycle);
     T = next;
     if (result.converged) break;
   }

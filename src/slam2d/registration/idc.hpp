@@ -34,7 +34,7 @@
 // The window B_r and the threshold D shrink exponentially with the iteration k:
 //     B_r(k) = max(B_final, B_r(0) exp(-alpha k))                                          Eq. (6)
 // Both stop when a step is below the tolerances or, once the bounds are at their floors, when
-// the pose returns to that of two iterations back (the pairs alternate).
+// the pose returns to one of the last two (the pairs alternate: PoseCycle, period 2).
 // Clouds are in their sensor frames and in beam order (bearings ascending), as to_point_cloud
 // gives them; the projective closest-point search relies on that order (it falls back to a
 // linear search for unordered clouds).

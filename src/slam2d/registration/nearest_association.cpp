@@ -117,11 +117,15 @@ bool step_below(const SE2& before, const SE2& after, double translation, double 
          std::abs(normalize_angle(after.theta() - before.theta())) < rotation;
 }
 
+PoseCycle::PoseCycle(std::size_t period) : period_(period) {
+  check(period >= 1 && period <= kMaxPeriod, "PoseCycle: the period must lie in [1, 4]");
+}
+
 bool PoseCycle::returned_to(const SE2& pose, double translation, double rotation) {
-  const std::size_t seen = std::min(count_, kPeriod);
+  const std::size_t seen = std::min(count_, period_);
   const bool returned = std::any_of(recent_.begin(), recent_.begin() + static_cast<std::ptrdiff_t>(seen),
                                     [&](const SE2& before) { return step_below(before, pose, translation, rotation); });
-  recent_[count_++ % kPeriod] = pose;
+  recent_[count_++ % period_] = pose;
   return returned;
 }
 

@@ -72,17 +72,24 @@ bool step_below(const SE2& before, const SE2& after, double translation, double 
 
 /// The iteration's poses of the last few steps: an iteration that comes back to one of them has
 /// entered a cycle of the associations (the pairs alternate between sets, so the steps never
-/// shrink below the stopping test), and is at its end, as CSM's loop detection has it.
+/// shrink below the stopping test), and is at its end, as CSM's loop detection has it. The one
+/// home of that test for the matchers that iterate on poses: point-to-plane remembers four poses,
+/// IDC, IMRP and the tangent search two (their papers' alternation between two sets). PL-ICP
+/// detects the same on its association sets (pl_icp.cpp).
 class PoseCycle {
  public:
-  static constexpr std::size_t kPeriod = 4;  // the longest cycle recognised, in iterations
+  static constexpr std::size_t kMaxPeriod = 4;  // the longest cycle recognised, in iterations
 
-  /// True when `pose` lies within `translation` and `rotation` of one of the last kPeriod poses
-  /// given; `pose` is then remembered.
+  /// Throws Error unless 1 <= period <= kMaxPeriod.
+  explicit PoseCycle(std::size_t period = kMaxPeriod);
+
+  /// True when `pose` lies within `translation` and `rotation` of one of the last `period` poses
+  /// given (step_below); `pose` is then remembered.
   bool returned_to(const SE2& pose, double translation, double rotation);
 
  private:
-  std::array<SE2, kPeriod> recent_{};
+  std::array<SE2, kMaxPeriod> recent_{};
+  std::size_t period_;
   std::size_t count_ = 0;
 };
 

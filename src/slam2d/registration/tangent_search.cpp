@@ -156,12 +156,6 @@ SE2 rotation_search(const TangentPairs& pairs, const SE2& T, double width) {
   return SE2(translation_for(pairs, w, T.translation(), cost), w);
 }
 
-bool small_step(const SE2& before, const SE2& after, const TangentSearchConfig& config) {
-  const SE2 step = before.between(after);
-  return step.translation().norm() <= config.translation_tolerance &&
-         std::abs(step.theta()) <= config.rotation_tolerance;
-}
-
 // Fills inliers, residual, covariance and the degeneracy verdict from the final pairs.
 void finish(const PointCloud2& target, const PointCloud2& source, const TangentPairs& pairs,
             const TangentSearchConfig& config, MatchResult& result) {
@@ -217,7 +211,7 @@ MatchResult match_tangent_search(const PointCloud2& target, const PointCloud2& s
         tangent_histogram_rotation(target_tangents, source_tangents, T_target_source_guess.theta(), config));  // Eq. (1)
   MatchResult result;
   TangentPairs pairs;
-  SE2 before_last = T;  // a return to the pose of two iterations ago is a cycle of the pairs: the end
+  PoseCycle cycle(2);  // a return to a pose of the last two iterations is a cycle of the pairs: the end
   for (int k = 0; k < config.max_iterations; ++k) {
     const double max_distance = std::max(config.max_distance_final,
                                          config.max_distance_initial * std::exp(-config.max_distance_decay * k));
@@ -226,8 +220,9 @@ MatchResult match_tangent_search(const PointCloud2& target, const PointCloud2& s
     const SE2 next = rotation_search(pairs, T, config.rotation_search_width);  // Eq. (2)-(4)
     result.iterations = k + 1;
     const bool settled = max_distance == config.max_distance_final;
-    result.converged = settled && (small_step(T, next, config) || (k >= 2 && small_step(before_last, next, config)));
-    before_last = T;
+    const bool returned = cycle.returned_to(next, config.translation_tolerance, config.rotation_tolerance);
+    result.converged =
+        settled && (step_below(T, next, config.translation_tolerance, config.rotation_tolerance) || returned);
     T = next;
     if (result.converged) break;
   }
