@@ -35,6 +35,9 @@ void add_map_command(CLI::App& app) {
   command->add_flag("!--no-odometry-smoothing", options->odometry_smoothing,
                     "Keep the method's per-scan poses as they are (default: smoothed with the odometry, each weighed "
                     "by the noise the data shows; docs/fusion_by_uncertainty.md)");
+  command->add_flag("--smoothing-third-stream", options->smoothing_third_stream,
+                    "Estimate the smoothing's noises with PL-ICP scan odometry as a third stream: tells a slow error "
+                    "of the method (a noisy laser) from the odometry's drift (docs/fusion_by_uncertainty.md)");
   add_odometry_time_offset_option(command, options->odometry_time_offset);
   command->add_option("--scan-rate", options->scan_rate,
                       "Hz: the method sees one scan per 1/rate s (the time-based subset; a standing robot still contributes "

@@ -21,6 +21,8 @@
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/methods/method_presets.hpp"
+#include "slam2d/registration/pl_icp.hpp"
+#include "slam2d/registration/scan_odometry.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/fusion/discontinuity_smoothing.hpp"
@@ -51,6 +53,7 @@ struct MappingRun {
   std::optional<Trajectory> dense_trajectory;
   std::optional<Trajectory> sparse_trajectory;
   std::vector<SE2> odometry;  // the odometry pose each scan of the trajectory came with, when it came with one
+  std::vector<SE2> scan_odometry;  // PL-ICP scan odometry at each scan: the smoothing's third stream
 };
 
 // Kaijaluoto et al. 2015's rate of the time-based subset the sparse method of a chain sees.
@@ -110,6 +113,26 @@ struct IgnoreImu {
   void operator()(const ImuMessage&) const {}
 };
 
+// Whether the method's poses are smoothed with the odometry (slam/fusion/odometry_smoothing.hpp):
+// only with an odometry that is a sensor of its own (the log's, a trajectory file's); Hector's,
+// the laser's, would share the method's errors.
+bool smoothed_with_odometry(const MapJobOptions& options, const OdometryFeed& feed) {
+  const bool own_sensor = feed.kind == OdometryFeed::Kind::kLog || feed.kind == OdometryFeed::Kind::kTrajectory;
+  return options.odometry_smoothing && options.method != "odometry" && own_sensor;
+}
+
+// The smoothing's third stream: PL-ICP scan odometry against the last keyframe alone (its
+// projective search; the stream is there for its errors' independence, not its accuracy), from
+// the odometry's guess. Neither guess makes it independent: from the odometry's it keeps part of
+// the odometry's error (docs/methods/pl_icp.md), which makes the odometry look better than it is;
+// from constant velocity it shares the method's errors under a noisy laser, which makes the
+// method look better (docs/fusion_by_uncertainty.md). Only the first does no harm at 10 s.
+ScanOdometry third_stream_odometry() {
+  return ScanOdometry([](const PointCloud2& target, const PointCloud2& source,
+                         const SE2& guess) { return match_pl_icp(target, source, guess); },
+                      ScanOdometryConfig{.local_map_keyframes = 1});
+}
+
 // Streams the log's laser scans to `add_scan(laser, odometry)` (which returns the robot pose it
 // estimated) and its IMU readings to `on_imu`, with the progress line; the scans left out by
 // --scan-rate or outside a trajectory feed's span are skipped. Fills every field of the run but
@@ -121,6 +144,8 @@ MappingRun run_over_scans(const MapJobOptions& options, const OdometryFeed& feed
   Progress progress(label, options.quiet);
   MappingRun run;
   ScanRateFilter rate(options.scan_rate);
+  std::optional<ScanOdometry> scan_odometry;
+  if (options.smoothing_third_stream && smoothed_with_odometry(options, feed)) scan_odometry.emplace(third_stream_odometry());
   std::size_t outside_feed = 0;
   std::size_t scans = 0;
   while (auto message = reader.next()) {
@@ -150,6 +175,7 @@ MappingRun run_over_scans(const MapJobOptions& options, const OdometryFeed& feed
     if (run.trajectory.empty()) run.T_robot_sensor = laser->scan.T_robot_sensor;
     run.trajectory.push_back(laser->scan.stamp, add_scan(*laser, odometry));
     if (odometry) run.odometry.push_back(*odometry);
+    if (scan_odometry) run.scan_odometry.push_back(scan_odometry->add(laser->scan, odometry));
   }
   progress.finish();
   print_reader_warnings(reader);
@@ -408,7 +434,7 @@ void smooth_run_with_odometry(MappingRun& run, const MapJobOptions& options) {
   config.enabled = options.odometry_smoothing;
   const std::vector<SE2> method = poses_of(run.trajectory);
   OdometrySmoothingStats stats;
-  const std::vector<SE2> smoothed = smooth_with_odometry(method, run.odometry, config, &stats);
+  const std::vector<SE2> smoothed = smooth_with_odometry(method, run.odometry, config, &stats, &run.scan_odometry);
   if (stats.applied) {
     Trajectory trajectory;
     trajectory.reserve(smoothed.size());
@@ -424,6 +450,10 @@ void smooth_run_with_odometry(MappingRun& run, const MapJobOptions& options) {
     report.add("odometry_jitter_sigma", triple(stats.noise.odometry_jitter));
     report.add("odometry_translation_scale", stats.noise.translation_scale);
     report.add("odometry_rotation_scale", stats.noise.rotation_scale);
+    report.add("streams", stats.noise.streams);
+    report.add("method_slow_sigma", triple(stats.noise.method_slow));
+    report.add("method_time_constant_scans",
+               std::vector<double>{stats.noise.method_time_constant.x(), stats.noise.method_time_constant.y()});
     report.add("odometry_steps_refused", stats.steps_refused).add("poses_downweighted", stats.poses_downweighted);
     report.add("max_change_m", stats.max_change_m);
   }
@@ -436,8 +466,7 @@ MappingRun run_method(const MapJobOptions& options) {
   const std::string source = odometry_source_of(options, options.method);
   const OdometryFeed feed = resolve_odometry_feed(options, source, hector);
   MappingRun run = run_method(options.method, options, feed);
-  const bool own_sensor = feed.kind == OdometryFeed::Kind::kLog || feed.kind == OdometryFeed::Kind::kTrajectory;
-  if (options.method != "odometry" && own_sensor) smooth_run_with_odometry(run, options);
+  if (smoothed_with_odometry(options, feed)) smooth_run_with_odometry(run, options);
   run.method_summary.add("odometry_source", source);
   if (hector) run.method_summary.add("hector_cpu_s", hector->cpu_s).add("hector_jumps_smoothed", hector->jumps);
   return run;

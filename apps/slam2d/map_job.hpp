@@ -34,6 +34,10 @@ struct MapJobOptions {
   // hector, graph, rbpf given odometry (log or a trajectory file): the per-scan poses smoothed
   // with the odometry's increments, each weighed by its own noise (slam/fusion/odometry_smoothing.hpp).
   bool odometry_smoothing = true;
+  // The smoothing's noises estimated with PL-ICP scan odometry as a third stream, which tells the
+  // method's slow error from the odometry's drift (odometry_smoothing.hpp, header 3). Off by
+  // default: about 1 s of CPU on Intel, FR079 a little worse, one seed (docs/fusion_by_uncertainty.md).
+  bool smoothing_third_stream = false;
   std::optional<double> scan_rate;   // Hz: the method sees at most one scan per 1/rate s (the time-based subset)
   // Overrides of the method's config (preset or defaults) when set:
   std::optional<double> resolution;      // m per cell (odometry: 0.05 when unset)

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -193,65 +194,99 @@ Eigen::Matrix3d rotation3(double theta) {
 
 Eigen::Vector3d squared(const Eigen::Vector3d& sigma) { return sigma.cwiseProduct(sigma); }
 
-// The Rauch-Tung-Striebel smoother (header): Q[i] the odometry increment i-1 -> i's covariance in
-// the robot frame, cut[i] the increments refused (the filter restarts at the method's pose), jitter
-// R's diagonal in the robot frame. A method pose beyond the gate of its innovation keeps gate / m^2
-// of its information (counted in downweighted).
+// The method's slow error as the smoother carries it: per axis (x, y, theta) its variance
+// sigma_b^2 and its factor phi = exp(-1 / tau) from one scan to the next (header, 3).
+struct SlowError {
+  Eigen::Vector3d variance = Eigen::Vector3d::Zero();
+  Eigen::Vector3d factor = Eigen::Vector3d::Zero();
+};
+
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+// Floor of the slow error's variance in the smoother: where there is none, its states stay at 0
+// and the covariance stays invertible.
+constexpr double kMinSlowVariance = 1e-12;
+// The prediction's variance of a pose after an increment refused (the chain is cut): unknown.
+constexpr double kCutVariance = 1e6;
+
+// The Rauch-Tung-Striebel smoother (header) on the state (x, b), the pose and the method's slow
+// error in the map frame: Q[i] the odometry increment i-1 -> i's covariance in the robot frame,
+// cut[i] the increments refused (the pose is then predicted as unknown, b carries on), jitter R's
+// diagonal in the robot frame. The method's pose measures x + b. A method pose beyond the gate of
+// its innovation keeps gate / m^2 of its information (counted in downweighted).
 std::vector<Eigen::Vector3d> rts_smoother(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
                                           const std::vector<Eigen::Vector3d>& Q, const std::vector<bool>& cut,
-                                          const Eigen::Vector3d& jitter, double gate, std::size_t& downweighted) {
+                                          const Eigen::Vector3d& jitter, const SlowError& slow, double gate,
+                                          std::size_t& downweighted) {
   const Eigen::Matrix3d R_robot = jitter.asDiagonal();
   const auto R_map = [&](const SE2& pose) {
     const Eigen::Matrix3d g = rotation3(pose.theta());
     return Eigen::Matrix3d(g * R_robot * g.transpose());
   };
+  const Eigen::Vector3d slow_variance = slow.variance.cwiseMax(kMinSlowVariance);
+  const Eigen::Matrix3d F_b = slow.factor.asDiagonal();
+  const Eigen::Matrix3d Q_b =
+      (slow_variance.array() * (1.0 - slow.factor.array().square())).max(kMinSlowVariance).matrix().asDiagonal();
+  Eigen::Matrix<double, 3, 6> H;
+  H << Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity();
   const std::size_t n = method.size();
-  std::vector<Eigen::Vector3d> filtered(n), predicted(n);
-  std::vector<Eigen::Matrix3d> P_filtered(n), P_predicted(n), transition(n);
-  filtered[0] = method[0].vector();
-  P_filtered[0] = R_map(method[0]);
+  std::vector<Vector6> filtered(n), predicted(n);
+  std::vector<Matrix6> P_filtered(n), P_predicted(n), transition(n);
+  // The first pose: x = m - b, b from its prior.
+  filtered[0] << method[0].vector(), Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d B0 = slow_variance.asDiagonal();
+  P_filtered[0] << R_map(method[0]) + B0, -B0, -B0, B0;
   for (std::size_t i = 1; i < n; ++i) {
-    if (cut[i]) {
-      filtered[i] = method[i].vector();
-      P_filtered[i] = R_map(method[i]);
-      continue;
+    const Vector6& previous = filtered[i - 1];
+    const Eigen::Vector3d b = F_b * previous.tail<3>();
+    Matrix6 J = Matrix6::Identity();
+    J.bottomRightCorner<3, 3>() = F_b;
+    Matrix6 process = Matrix6::Zero();
+    process.bottomRightCorner<3, 3>() = Q_b;
+    if (cut[i]) {  // the odometry's increment is refused: the pose is unknown, b carries on
+      predicted[i] << method[i].vector() - b, b;
+      J.topLeftCorner<3, 3>().setZero();
+      process.topLeftCorner<3, 3>() = kCutVariance * Eigen::Matrix3d::Identity();
+    } else {  // predict along the odometry's increment
+      const SE2 u = odometry[i - 1].between(odometry[i]);
+      const double c = std::cos(previous.z());
+      const double s = std::sin(previous.z());
+      predicted[i] << previous.x() + c * u.x() - s * u.y(), previous.y() + s * u.x() + c * u.y(),
+          previous.z() + u.theta(), b;
+      J(0, 2) = -s * u.x() - c * u.y();
+      J(1, 2) = c * u.x() - s * u.y();
+      const Eigen::Matrix3d G = rotation3(previous.z());
+      process.topLeftCorner<3, 3>() = G * Eigen::Matrix3d(Q[i].asDiagonal()) * G.transpose();
     }
-    const SE2 u = odometry[i - 1].between(odometry[i]);
-    // Predict along the odometry's increment.
-    const Eigen::Vector3d& x = filtered[i - 1];
-    const double c = std::cos(x.z());
-    const double s = std::sin(x.z());
-    predicted[i] = Eigen::Vector3d(x.x() + c * u.x() - s * u.y(), x.y() + s * u.x() + c * u.y(), x.z() + u.theta());
-    Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-    J(0, 2) = -s * u.x() - c * u.y();
-    J(1, 2) = c * u.x() - s * u.y();
     transition[i] = J;
-    const Eigen::Matrix3d G = rotation3(x.z());
-    P_predicted[i] = J * P_filtered[i - 1] * J.transpose() + G * Eigen::Matrix3d(Q[i].asDiagonal()) * G.transpose();
-    // Update with the method's pose.
-    const Eigen::Vector3d innovation = minus(method[i].vector(), predicted[i]);
+    P_predicted[i] = J * P_filtered[i - 1] * J.transpose() + process;
+    // Update with the method's pose, which measures x + b.
+    const Eigen::Vector3d innovation = minus(method[i].vector(), H * predicted[i]);
     Eigen::Matrix3d R = R_map(method[i]);
-    Eigen::Matrix3d S = P_predicted[i] + R;
+    Eigen::Matrix3d S = H * P_predicted[i] * H.transpose() + R;
     const double m2 = innovation.dot(S.ldlt().solve(innovation));
     if (m2 > gate) {
       R *= m2 / gate;
-      S = P_predicted[i] + R;
+      S = H * P_predicted[i] * H.transpose() + R;
       ++downweighted;
     }
-    const Eigen::Matrix3d K = S.transpose().ldlt().solve(P_predicted[i].transpose()).transpose();
+    const Eigen::Matrix<double, 6, 3> K = (P_predicted[i] * H.transpose()) * S.inverse();
     filtered[i] = predicted[i] + K * innovation;
-    const Eigen::Matrix3d P = (Eigen::Matrix3d::Identity() - K) * P_predicted[i];
+    const Matrix6 P = (Matrix6::Identity() - K * H) * P_predicted[i];
     P_filtered[i] = 0.5 * (P + P.transpose());
   }
-  // Backward: x_s(i) = x_f(i) + C (x_s(i+1) - x_p(i+1)), C = P_f(i) J(i+1)^T P_p(i+1)^-1.
-  std::vector<Eigen::Vector3d> smoothed = filtered;
+  // Backward: s(i) = f(i) + C (s(i+1) - p(i+1)), C = P_f(i) J(i+1)^T P_p(i+1)^-1.
+  std::vector<Vector6> smoothed = filtered;
   for (std::size_t i = n - 1; i-- > 0;) {
-    if (cut[i + 1]) continue;
-    const Eigen::Matrix3d C =
-        P_predicted[i + 1].transpose().ldlt().solve((P_filtered[i] * transition[i + 1].transpose()).transpose()).transpose();
-    smoothed[i] = filtered[i] + C * minus(smoothed[i + 1], predicted[i + 1]);
+    const Matrix6 C = P_predicted[i + 1].transpose().ldlt().solve((P_filtered[i] * transition[i + 1].transpose()).transpose()).transpose();
+    Vector6 difference = smoothed[i + 1] - predicted[i + 1];
+    difference(2) = normalize_angle(difference(2));
+    smoothed[i] = filtered[i] + C * difference;
   }
-  return smoothed;
+  std::vector<Eigen::Vector3d> poses(n);
+  for (std::size_t i = 0; i < n; ++i) poses[i] = smoothed[i].head<3>();
+  return poses;
 }
 
 // The motion noise model's variances (x, y, theta) of each odometry increment i-1 -> i (entry 0
@@ -268,9 +303,149 @@ std::vector<Eigen::Vector3d> model_variances(const std::vector<SE2>& odometry, c
   return variances;
 }
 
+// The lags of the method's slow error (scans; at most a quarter of the run).
+constexpr std::array<std::size_t, 12> kSlowLags{1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64};
+
+// One sample of the three-cornered hat on increments (header, 3): for the increments over k scans
+// from scan i, a = m - o, b = s - o, c = m - s; a . b estimates the odometry's error variance, a . c
+// the method's (translation: the mean of x's and y's).
+struct HatSample {
+  std::size_t first = 0;  // i
+  double odometry_translation = 0.0, odometry_rotation = 0.0;
+  double method_translation = 0.0, method_rotation = 0.0;
+};
+
+// The samples of lag k, the trim_quantile with the smallest disagreements |a| + |b| + |c|
+// (translation, L1) kept: a match gone wrong, an odometry jump.
+std::vector<HatSample> hat_samples(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                   const std::vector<SE2>& scan, std::size_t k, double trim_quantile) {
+  std::vector<HatSample> samples;
+  std::vector<double> size;
+  for (std::size_t i = 0; i + k < method.size(); ++i) {
+    const Eigen::Vector3d m = relative(method[i], method[i + k]);
+    const Eigen::Vector3d o = relative(odometry[i], odometry[i + k]);
+    const Eigen::Vector3d s = relative(scan[i], scan[i + k]);
+    const Eigen::Vector3d a = minus(m, o), b = minus(s, o), c = minus(m, s);
+    samples.push_back({i, 0.5 * (a.x() * b.x() + a.y() * b.y()), a.z() * b.z(), 0.5 * (a.x() * c.x() + a.y() * c.y()),
+                       a.z() * c.z()});
+    size.push_back(a.head<2>().lpNorm<1>() + b.head<2>().lpNorm<1>() + c.head<2>().lpNorm<1>());
+  }
+  if (samples.empty()) return samples;
+  std::vector<double> sorted = size;
+  const auto nth = sorted.begin() + static_cast<std::ptrdiff_t>(trim_quantile * static_cast<double>(sorted.size() - 1));
+  std::nth_element(sorted.begin(), nth, sorted.end());
+  std::vector<HatSample> kept;
+  for (std::size_t j = 0; j < samples.size(); ++j) {
+    if (size[j] <= *nth) kept.push_back(samples[j]);
+  }
+  return kept;
+}
+
+// The best non-negative x of min |A x - y|^2 over the few columns of A: every subset of columns
+// solved freely, the feasible solution of least residual kept.
+template <int N>
+Eigen::Matrix<double, N, 1> non_negative_least_squares(const Eigen::Matrix<double, Eigen::Dynamic, N>& A,
+                                                       const Eigen::VectorXd& y) {
+  Eigen::Matrix<double, N, 1> best = Eigen::Matrix<double, N, 1>::Zero();
+  double best_sse = y.squaredNorm();
+  for (int subset = 1; subset < (1 << N); ++subset) {
+    std::vector<int> columns;
+    for (int c = 0; c < N; ++c) {
+      if (subset & (1 << c)) columns.push_back(c);
+    }
+    Eigen::MatrixXd B(A.rows(), static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t c = 0; c < columns.size(); ++c) B.col(static_cast<Eigen::Index>(c)) = A.col(columns[c]);
+    const Eigen::VectorXd solution = B.colPivHouseholderQr().solve(y);
+    if (!solution.allFinite() || solution.minCoeff() < 0.0) continue;
+    const double sse = (B * solution - y).squaredNorm();
+    if (sse < best_sse) {
+      best_sse = sse;
+      best.setZero();
+      for (std::size_t c = 0; c < columns.size(); ++c) best(columns[c]) = solution(static_cast<Eigen::Index>(c));
+    }
+  }
+  return best;
+}
+
+// The method's variances at one lag of the increments (header, 3), per axis group, and the mean
+// squared length of its increments there (a heading error of the first pose moves the increment's
+// end by the increment's length times that error: the translation grows with it, not slowly).
+struct LagVariance {
+  double lag = 0.0;                   // scans
+  double translation = 0.0, rotation = 0.0;
+  double lever = 0.0;                 // half the mean squared length of the increments, m^2
+};
+
+// The slow error's variance and time constant of one axis group (header, 3): V = w + 2 sigma_b^2
+// (1 - exp(-k / tau)), the white part w and sigma_b^2 non-negative, by least squares relative to
+// each lag's V; tau the best of 1, 2, 4, ... max_time_constant. For translation, V is first rid of
+// the lever term: L times the variance of the method's heading (`heading_variance`).
+std::pair<double, double> fit_slow_error(const std::vector<LagVariance>& lags, bool translation,
+                                         double heading_variance, double max_time_constant) {
+  const auto rows = static_cast<Eigen::Index>(lags.size());
+  double best_sse = std::numeric_limits<double>::infinity(), best_variance = 0.0, best_tau = 1.0;
+  for (double tau = 1.0; tau <= max_time_constant; tau *= 2.0) {
+    Eigen::Matrix<double, Eigen::Dynamic, 2> A(rows, 2);
+    Eigen::VectorXd y(rows);
+    for (Eigen::Index j = 0; j < rows; ++j) {
+      const LagVariance& v = lags[static_cast<std::size_t>(j)];
+      const double value = translation ? v.translation - v.lever * heading_variance : v.rotation;
+      const double weight = 1.0 / std::max(std::abs(translation ? v.translation : v.rotation), 1e-12);
+      A.row(j) << weight, weight * 2.0 * (1.0 - std::exp(-v.lag / tau));
+      y(j) = weight * value;
+    }
+    const Eigen::Vector2d x = non_negative_least_squares<2>(A, y);
+    const double sse = (A * x - y).squaredNorm();
+    if (sse < best_sse) best_sse = sse, best_variance = x(1), best_tau = tau;
+  }
+  return {best_variance, best_tau};
+}
+
+// With the third stream (header, 3): the odometry's drift scales from its own variances, and the
+// method's slow error from its own.
+void estimate_with_scan_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                 const std::vector<SE2>& scan, const std::vector<double>& translation_sum,
+                                 const std::vector<double>& rotation_sum, const OdometrySmoothingConfig& config,
+                                 PoseStreamNoise& noise) {
+  const Eigen::Vector3d odometry_white = squared(noise.odometry_jitter);
+  GrowthSamples translation, rotation;
+  for (const std::size_t k : kLags) {
+    for (const HatSample& h : hat_samples(method, odometry, scan, k, config.trim_quantile)) {
+      translation.x.push_back(translation_sum[h.first + k] - translation_sum[h.first]);
+      translation.y.push_back(h.odometry_translation - (odometry_white.x() + odometry_white.y()));
+      rotation.x.push_back(rotation_sum[h.first + k] - rotation_sum[h.first]);
+      rotation.y.push_back(h.odometry_rotation - 2.0 * odometry_white.z());
+    }
+  }
+  noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
+  noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
+  std::vector<LagVariance> lags;
+  for (const std::size_t k : kSlowLags) {
+    if (4 * k > method.size()) break;
+    const std::vector<HatSample> samples = hat_samples(method, odometry, scan, k, config.trim_quantile);
+    if (samples.empty()) break;
+    LagVariance v{.lag = static_cast<double>(k)};
+    for (const HatSample& h : samples) {
+      v.translation += h.method_translation, v.rotation += h.method_rotation;
+      v.lever += 0.5 * relative(method[h.first], method[h.first + k]).head<2>().squaredNorm();
+    }
+    const auto count = static_cast<double>(samples.size());
+    v.translation /= count, v.rotation /= count, v.lever /= count;
+    lags.push_back(v);
+  }
+  // The heading's jitter moves each increment's end by the increment's length times it (a slow
+  // heading error turns the poses around it with their positions, and the increments do not see it).
+  const auto [br, taur] = fit_slow_error(lags, false, 0.0, config.max_time_constant);
+  const auto [bt, taut] = fit_slow_error(lags, true, squared(noise.method_jitter).z(), config.max_time_constant);
+  noise.method_slow = Eigen::Vector3d(std::sqrt(bt), std::sqrt(bt), std::sqrt(br));
+  noise.method_time_constant = Eigen::Vector2d(taut, taur);
+  noise.streams = 3;
+}
+
 // estimate_pose_stream_noise (header), given the model's variances of each increment.
 PoseStreamNoise estimate_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
-                               const std::vector<Eigen::Vector3d>& model, const OdometrySmoothingConfig& config) {
+                               const std::vector<Eigen::Vector3d>& model, const OdometrySmoothingConfig& config,
+                               const std::vector<SE2>* scan) {
   PoseStreamNoise noise;
   estimate_jitter(method, odometry, config.trim_quantile, config.jitter_confidence, noise);
   const Eigen::Vector3d white = squared(noise.method_jitter) + squared(noise.odometry_jitter);
@@ -282,6 +457,10 @@ PoseStreamNoise estimate_noise(const std::vector<SE2>& method, const std::vector
   for (std::size_t i = 1; i < n; ++i) {
     translation_sum[i] = translation_sum[i - 1] + model[i].x();
     rotation_sum[i] = rotation_sum[i - 1] + model[i].z();
+  }
+  if (scan != nullptr) {
+    estimate_with_scan_odometry(method, odometry, *scan, translation_sum, rotation_sum, config, noise);
+    return noise;
   }
   GrowthSamples translation, rotation;
   for (const std::size_t k : kLags) {
@@ -307,14 +486,17 @@ void validate(const OdometrySmoothingConfig& config) {
 }
 
 PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
-                                           const OdometrySmoothingConfig& config) {
+                                           const OdometrySmoothingConfig& config, const std::vector<SE2>* scan_odometry) {
   check(method.size() == odometry.size() && method.size() >= 5,
         "estimate_pose_stream_noise: two streams of the same length, at least 5 poses");
-  return estimate_noise(method, odometry, model_variances(odometry, config.odometry_noise), config);
+  check(scan_odometry == nullptr || scan_odometry->size() == method.size(),
+        "estimate_pose_stream_noise: the scan odometry must have one pose per scan");
+  return estimate_noise(method, odometry, model_variances(odometry, config.odometry_noise), config, scan_odometry);
 }
 
 std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
-                                      const OdometrySmoothingConfig& config, OdometrySmoothingStats* stats) {
+                                      const OdometrySmoothingConfig& config, OdometrySmoothingStats* stats,
+                                      const std::vector<SE2>* scan_odometry) {
   validate(config);
   OdometrySmoothingStats local;
   OdometrySmoothingStats& out = stats != nullptr ? *stats : local;
@@ -333,10 +515,17 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
     return method;
   }
   const std::vector<Eigen::Vector3d> model = model_variances(odometry, config.odometry_noise);
-  const PoseStreamNoise noise = estimate_noise(method, odometry, model, config);
+  const bool third_stream = scan_odometry != nullptr && scan_odometry->size() == method.size();
+  const PoseStreamNoise noise = estimate_noise(method, odometry, model, config, third_stream ? scan_odometry : nullptr);
   out.noise = noise;
   const Eigen::Vector3d jitter = squared(noise.method_jitter).cwiseMax(kMinJitterVariance);
   const Eigen::Vector3d odometry_white = squared(noise.odometry_jitter);
+  SlowError slow;
+  slow.variance = squared(noise.method_slow);
+  const Eigen::Vector3d tau(noise.method_time_constant.x(), noise.method_time_constant.x(), noise.method_time_constant.y());
+  slow.factor = (-tau.cwiseInverse()).array().exp().matrix();
+  // The method's own increment from scan to scan: twice its jitter and its slow error's step.
+  const Eigen::Vector3d method_step = 2.0 * jitter + 2.0 * slow.variance.cwiseProduct(Eigen::Vector3d::Ones() - slow.factor);
   const std::size_t n = method.size();
   // The odometry's covariance per step, and the steps cut from the chain: the odometry's increment
   // against the method's own, beyond the gate.
@@ -348,14 +537,14 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
                            noise.translation_scale * model[i].y() + 2.0 * odometry_white.y(),
                            noise.rotation_scale * model[i].z() + 2.0 * odometry_white.z());
     const Eigen::Vector3d step = minus(relative(method[i - 1], method[i]), u.vector());
-    const double step_m2 = step.cwiseProduct(step).cwiseQuotient(Q[i] + 2.0 * jitter).sum();
+    const double step_m2 = step.cwiseProduct(step).cwiseQuotient(Q[i] + method_step).sum();
     if (!std::isfinite(step_m2) || step_m2 > config.gate_chi2) {
       cut[i] = true;
       ++out.steps_refused;
     }
   }
   const std::vector<Eigen::Vector3d> smoothed =
-      rts_smoother(method, odometry, Q, cut, jitter, config.gate_chi2, out.poses_downweighted);
+      rts_smoother(method, odometry, Q, cut, jitter, slow, config.gate_chi2, out.poses_downweighted);
   std::vector<SE2> poses;
   poses.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {

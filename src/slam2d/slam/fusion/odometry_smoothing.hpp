@@ -36,6 +36,26 @@
 //    three times, trimming samples beyond 16 times the fit. Q_i = s q_i + 2 W.
 //    The method's own drift is indistinguishable from the odometry's there and is counted as the
 //    odometry's: it makes the smoother trust the method more, never less.
+// 3. With a third stream (scan odometry: scan-to-scan matches, whose error is a random walk of its
+//    own), the two-stream estimate of 2. is replaced. Two streams cannot tell a slow error of the
+//    method (a tracker following its local map for seconds, under a noisy laser) from the
+//    odometry's drift: the fit above counts it as the odometry's (Intel with a noisy laser: a drift
+//    scale of 5.5 against 1.8 clean) and the smoother passes it on. Three can, with the
+//    three-cornered hat on the increments themselves, at every lag and with no shape assumed: for
+//    the increments over k scans of the method m, the odometry o and the scan odometry s (each in
+//    its own first pose's frame), E[(m - o) . (s - o)] is the odometry's error variance and
+//    E[(m - o) . (m - s)] the method's, the three errors being independent. The drift fit of 2.
+//    runs on the first (lags 1-16; 1 % of the samples, the largest disagreements, left out). The
+//    second, over lags 1-64, gives the method a Gauss-Markov error b besides its jitter:
+//    b_{i+1} = phi b_i + w, phi = exp(-1 / tau), whose increments' variance 2 sigma_b^2 (1 - phi^k)
+//    is fitted with a white part beside it to the method's variances by non-negative least squares
+//    relative to each lag's value, per axis group (translation, rotation), tau the best of 1, 2,
+//    4, ... max_time_constant scans; the translation's variances first less the lever of the
+//    heading's jitter (half the increment's squared length times it). The smoother then carries b
+//    as three more states (the method's pose is x + b + its jitter) and lets the odometry carry
+//    the motion over the seconds b is slow. The scan odometry must be independent of the other
+//    two; it is not quite (apps' map_job.cpp says which way it leans), so this is an option
+//    (`slam2d map --smoothing-third-stream`).
 // Then forward over the scans: the odometry's increment predicts; it is refused (the chain is cut
 // and the filter restarts at the method's pose) where it disagrees with the method's own increment
 // beyond a chi-square gate under Q_i + 2R (a jump, a stall, a slip); the method's pose updates,
@@ -67,6 +87,7 @@ struct OdometrySmoothingConfig {
   double min_scale = 0.05;             // 1, lower bound of the odometry drift's scale s
   double max_scale = 100.0;            // 1, upper bound
   std::size_t min_poses = 50;          // fewer: the poses are left as they are
+  double max_time_constant = 64.0;     // scans, the longest time constant of the method's slow error
   OdometryNoiseConfig odometry_noise{};  // the motion noise model's form (its online scale is unused)
 };
 
@@ -80,6 +101,8 @@ void describe(Fields& f, OdometrySmoothingConfig& c) {
   f.number("min_scale", c.min_scale, "1", greater_than(0), "lower bound of the odometry drift's scale");
   f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound of the odometry drift's scale");
   f.number("min_poses", c.min_poses, "1", at_least(5), "shorter runs are left as they are");
+  f.number("max_time_constant", c.max_time_constant, "scans", between(1, 1024),
+           "longest time constant of the method's slow error (three streams: header, 3)");
   f.section("odometry_noise", c.odometry_noise, "the form of the odometry's motion noise (core/motion_fusion.hpp)");
 }
 
@@ -93,6 +116,10 @@ struct PoseStreamNoise {
   Eigen::Vector3d odometry_jitter = Eigen::Vector3d::Zero();  // sqrt(W)
   double translation_scale = 1.0;  // s of the odometry's drift, translation
   double rotation_scale = 1.0;     // ... rotation
+  // The method's slow (Gauss-Markov) error, estimated with a third stream only (header, 3):
+  Eigen::Vector3d method_slow = Eigen::Vector3d::Zero();  // sigma_b per axis (x, y the same; theta)
+  Eigen::Vector2d method_time_constant{1.0, 1.0};         // tau, scans: translation, rotation
+  std::size_t streams = 2;                                // 3 with the scan odometry
 };
 
 struct OdometrySmoothingStats {
@@ -105,15 +132,19 @@ struct OdometrySmoothingStats {
   double max_change_m = 0.0;          // the largest move of a pose
 };
 
-/// The noise of the two streams, as estimated above. `method` and `odometry` have one pose per
-/// scan, same size, at least 5 poses.
+/// The noise of the streams, as estimated above. `method` and `odometry` have one pose per scan,
+/// same size, at least 5 poses; `scan_odometry`, when given with the same size, is the third
+/// stream (header, 3).
 PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
-                                           const OdometrySmoothingConfig& config = {});
+                                           const OdometrySmoothingConfig& config = {},
+                                           const std::vector<SE2>* scan_odometry = nullptr);
 
 /// The smoothed poses, one per scan. Returns `method` itself when smoothing is disabled, the run
-/// is shorter than min_poses or the sizes differ (stats->skipped says which).
+/// is shorter than min_poses or the sizes differ (stats->skipped says which). A `scan_odometry` of
+/// another size than `method` is not used (two streams).
 std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
                                       const OdometrySmoothingConfig& config = {},
-                                      OdometrySmoothingStats* stats = nullptr);
+                                      OdometrySmoothingStats* stats = nullptr,
+                                      const std::vector<SE2>* scan_odometry = nullptr);
 
 }  // namespace slam2d
