@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -409,21 +410,23 @@ void estimate_with_scan_odometry(const std::vector<SE2>& method, const std::vect
                                  PoseStreamNoise& noise) {
   const Eigen::Vector3d odometry_white = squared(noise.odometry_jitter);
   GrowthSamples translation, rotation;
-  for (const std::size_t k : kLags) {
-    for (const HatSample& h : hat_samples(method, odometry, scan, k, config.trim_quantile)) {
+  std::vector<LagVariance> lags;
+  bool slow_lags_left = true;
+  // The drift's lags are the first of the slow error's: each lag's samples are drawn once for both.
+  static_assert(std::equal(kLags.begin(), kLags.end(), kSlowLags.begin()));
+  for (const std::size_t k : kSlowLags) {
+    const bool drift_lag = k <= kLags.back();
+    slow_lags_left = slow_lags_left && 4 * k <= method.size();
+    if (!drift_lag && !slow_lags_left) break;
+    const std::vector<HatSample> samples = hat_samples(method, odometry, scan, k, config.trim_quantile);
+    for (const HatSample& h : drift_lag ? samples : std::span<const HatSample>{}) {
       translation.x.push_back(translation_sum[h.first + k] - translation_sum[h.first]);
       translation.y.push_back(h.odometry_translation - (odometry_white.x() + odometry_white.y()));
       rotation.x.push_back(rotation_sum[h.first + k] - rotation_sum[h.first]);
       rotation.y.push_back(h.odometry_rotation - 2.0 * odometry_white.z());
     }
-  }
-  noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
-  noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
-  std::vector<LagVariance> lags;
-  for (const std::size_t k : kSlowLags) {
-    if (4 * k > method.size()) break;
-    const std::vector<HatSample> samples = hat_samples(method, odometry, scan, k, config.trim_quantile);
-    if (samples.empty()) break;
+    slow_lags_left = slow_lags_left && !samples.empty();
+    if (!slow_lags_left) continue;
     LagVariance v{.lag = static_cast<double>(k)};
     for (const HatSample& h : samples) {
       v.translation += h.method_translation, v.rotation += h.method_rotation;
@@ -433,6 +436,8 @@ void estimate_with_scan_odometry(const std::vector<SE2>& method, const std::vect
     v.translation /= count, v.rotation /= count, v.lever /= count;
     lags.push_back(v);
   }
+  noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
+  noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
   // The heading's jitter moves each increment's end by the increment's length times it (a slow
   // heading error turns the poses around it with their positions, and the increments do not see it).
   const auto [br, taur] = fit_slow_error(lags, false, 0.0, config.max_time_constant);
