@@ -138,7 +138,8 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
   const Eigen::Vector3d inverse_variances = sigmas.cwiseProduct(sigmas).cwiseInverse();
   const PosePrior prior{.mean = predicted,
                         .information = config.motion_prior_weight * config.likelihood_sigma * config.likelihood_sigma *
-                                       R * inverse_variances.asDiagonal() * R.transpose()};
+                                       R * inverse_variances.asDiagonal() * R.transpose(),
+                        .kernel = config.motion_prior_kernel};
   const MatchResult match = match_scan_to_pyramid(map, points_robot, predicted, config.matcher,
                                                   config.motion_prior_weight > 0.0 ? std::optional(prior) : std::nullopt);
   const Eigen::Vector3d correction = local_coordinates(predicted, match.T_target_source);
@@ -147,6 +148,7 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
     return result;
   }
   result.x_star = match.T_target_source;
+  result.match_covariance = match.covariance;
   if (!fit) {
     result.matched = true;
     return result;

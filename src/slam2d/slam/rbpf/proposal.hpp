@@ -64,6 +64,9 @@ struct RbpfProposalConfig {
   // The motion model as a Gaussian prior in the scan matching (x* maximises likelihood times
   // motion model, the proposal's mode); 0 matches on the likelihood alone, 1 is the exact product.
   double motion_prior_weight = 1.0;
+  // On the motion prior's Mahalanobis distance (occupancy_gradient_match.hpp's PosePrior); kNone
+  // keeps the plain Gaussian of the paper.
+  RobustKernel motion_prior_kernel{};
   std::size_t likelihood_stride = 2;
   int sample_radius = 1;
   double sample_step_translation = 0.02;
@@ -85,6 +88,7 @@ void describe(Fields& f, RbpfProposalConfig& c) {
   f.number("weight_gain", c.weight_gain, "1", open_closed(0, 1), "the weight update is log eta * weight_gain");
   f.number("motion_prior_weight", c.motion_prior_weight, "1", at_least(0),
            "weight of the motion model as a prior in the scan matching (0: off, 1: the exact product)");
+  f.section("motion_prior_kernel", c.motion_prior_kernel, "on the motion prior's Mahalanobis distance (none: Gaussian)");
   f.number("likelihood_stride", c.likelihood_stride, "1", at_least(1),
            "the K poses' likelihood reads every n-th end point (scaled to all of them)");
   f.number("sample_radius", c.sample_radius, "1", between(1, 5), "K = (2 radius + 1)^3 poses around x*");
@@ -119,6 +123,9 @@ struct ProposalResult {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // Sigma, same frame
   double log_normalizer = 0.0;         // log(eta * cell volume)
   bool matched = false;                // false: use the motion model (fallback)
+  // The scan match's covariance at x* (map frame; Hector's s^2 H^-1, the motion prior's
+  // information in it); unknown unless matched.
+  Covariance3 match_covariance = unknown_covariance();
 };
 
 /// Scan matching and the Gaussian fit of Eq. (14)-(18). An empty map (no scan yet) or a rejected

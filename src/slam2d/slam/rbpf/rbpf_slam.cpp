@@ -38,6 +38,10 @@ MapPyramidConfig map_config(const RbpfConfig& config) {
 RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
   RbpfProposalConfig matching = config.proposal;
   matching.motion_prior_weight = config.scan_odometry_prior_weight;
+  if (config.scan_odometry_prior_from_motion_noise) {  // the exact product under Hector's kernel
+    matching.motion_prior_weight = 1.0;
+    matching.motion_prior_kernel = {.type = RobustKernelType::kCauchy, .scale = 2.0};
+  }
   matching.matcher.rotation_search_range = config.scan_odometry_rotation_search;
   matching.matcher.rotation_search_step = config.scan_odometry_rotation_step;
   matching.matcher.rotation_search_margin = config.scan_odometry_rotation_margin;
@@ -56,6 +60,7 @@ void validate(const RbpfConfig& config) {
   check(config.max_range > config.min_range, "RbpfConfig: max_range must be > min_range");
   validate(scan_odometry_matching(config).matcher);  // the rotation search's number of starts
   validate(config.proposal);
+  validate(config.scan_odometry_noise);
 }
 
 RbpfPathNode::~RbpfPathNode() {
@@ -65,7 +70,8 @@ RbpfPathNode::~RbpfPathNode() {
   while (next && next.use_count() == 1) next = std::move(next->parent);
 }
 
-RbpfSlam::RbpfSlam(const RbpfConfig& config) : config_(config), odometry_guard_(config.odometry_guard) {
+RbpfSlam::RbpfSlam(const RbpfConfig& config)
+    : config_(config), odometry_guard_(config.odometry_guard), scan_odometry_noise_(config.scan_odometry_noise) {
   validate(config_);
   const int threads = std::min(config_.threads == 0 ? tbb::info::default_concurrency() : config_.threads,
                                config_.particles);
@@ -209,8 +215,9 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
     RbpfProposalConfig matching = scan_odometry_matching(config_);
     if (!odometry.trusted()) matching.motion_prior_weight = 0.0;
-    const ProposalResult match = improved_proposal(particle.map, points, predicted, motion_sigmas(delta, config_.motion),
-                                                   matching, /*fit=*/false);
+    const ProposalResult match =
+        improved_proposal(particle.map, points, predicted, scan_odometry_sigmas(delta), matching, /*fit=*/false);
+    learn_odometry_noise(odometry, delta, previous, match);
     std::optional<SE2> matched = match.matched ? std::optional(match.x_star) : std::nullopt;
     if (odometry.fault == OdometryFault::kCatchUp) {
       const ProposalResult second = improved_proposal(particle.map, points, previous, motion_sigmas(SE2(), config_.motion),
@@ -226,6 +233,25 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
   last_corrected_odometry_ = corrected;
   if (odometry.moved) last_moved_corrected_ = corrected;
   return corrected;
+}
+
+// The motion prior's sigmas for the per-scan matching of the increment `delta`: the motion model's,
+// or the learnt odometry noise model's (config.scan_odometry_prior_from_motion_noise).
+Eigen::Vector3d RbpfSlam::scan_odometry_sigmas(const SE2& delta) const {
+  if (!config_.scan_odometry_prior_from_motion_noise) return motion_sigmas(delta, config_.motion);
+  return scan_odometry_noise_.covariance(delta).diagonal().cwiseSqrt();
+}
+
+// The odometry's noise learnt from a trusted increment and the matched motion since the previous
+// scan, whose uncertainty is the two matches' (as Hector's tracker learns it; an unknown one
+// teaches nothing).
+void RbpfSlam::learn_odometry_noise(const OdometryCheck& odometry, const SE2& delta, const SE2& previous,
+                                    const ProposalResult& match) {
+  if (config_.scan_odometry_prior_from_motion_noise && odometry.trusted() && match.matched) {
+    scan_odometry_noise_.observe(delta, previous.between(match.x_star),
+                                 rotate_covariance(last_match_covariance_ + match.match_covariance, -previous.theta()));
+  }
+  last_match_covariance_ = match.matched ? match.match_covariance : unknown_covariance();
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
