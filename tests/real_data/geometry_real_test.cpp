@@ -12,13 +12,13 @@
 #include <iostream>
 #include <numbers>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/detail/number_format.hpp"
 #include "slam2d/io/detail/text_input.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -94,15 +94,6 @@ void rewrite(const std::string& source, const std::string& target, const std::st
   ASSERT_EQ(replaced, 1u) << from;
 }
 
-std::vector<LaserMessage> lasers_of(const std::string& path) {
-  CarmenReader reader(path);
-  std::vector<LaserMessage> lasers;
-  while (auto message = reader.next()) {
-    if (auto* laser = std::get_if<LaserMessage>(&*message)) lasers.push_back(std::move(*laser));
-  }
-  return lasers;
-}
-
 TEST(GeometryRealData, ParamsRewrittenInRadiansGiveTheSameScans) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   // Freiburg 101: "PARAM laser_front_laser_resolution 0.5 nohost 0", 360 beams.
@@ -119,13 +110,13 @@ TEST(GeometryRealData, ParamsRewrittenInRadiansGiveTheSameScans) {
       // The held-out log's pair: the field of view in radians (rounded as printed) next to the resolution in degrees.
       {"fov_radians.log", {"PARAM laser_front_laser_fov 3.14159 nohost 0", "PARAM laser_front_laser_resolution 0.5 nohost 0"}},
   };
-  const std::vector<LaserMessage> expected = lasers_of(original);
+  const std::vector<LaserMessage> expected = test::laser_messages(test::read_log(original));
   ASSERT_EQ(expected.size(), 292u);
   for (const Variant& variant : variants) {
     SCOPED_TRACE(variant.name);
     const std::string path = dir.file(variant.name);
     rewrite(original, path, resolution_line, variant.lines);
-    const std::vector<LaserMessage> actual = lasers_of(path);
+    const std::vector<LaserMessage> actual = test::laser_messages(test::read_log(path));
     ASSERT_EQ(actual.size(), expected.size());
     for (std::size_t i = 0; i < actual.size(); ++i) {
       const LaserScan& a = actual[i].scan;

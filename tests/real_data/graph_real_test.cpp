@@ -16,8 +16,8 @@
 #include "slam2d/eval/relation_error.hpp"
 #include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
-#include "slam2d/sim/fault_injection.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -58,13 +58,9 @@ double end_error(const Trajectory& trajectory, const Trajectory& reference) {
 // ACES's scans with `fault` injected (perturb's, seed 1), mapped with their odometry: the relation
 // error over all relations (m).
 double aces_error_under(const std::filesystem::path& data, const std::string& fault, const GraphSlamConfig& config) {
-  std::vector<SensorMessage> messages;
-  CarmenReader reader((data / "aces/aces.clf.gz").string());
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
-  apply_faults({parse_fault(fault)}, messages, 1);
   GraphSlam slam(config);
-  for (const SensorMessage& message : messages) {
-    if (const auto* laser = std::get_if<LaserMessage>(&message)) slam.add_scan(laser->scan, laser->odom_pose);
+  for (const LaserMessage& laser : test::laser_messages(test::read_log_with_fault(data / "aces/aces.clf.gz", fault))) {
+    slam.add_scan(laser.scan, laser.odom_pose);
   }
   slam.finish();
   return relation_error(slam.trajectory(), read_relations((data / "aces/aces.relations").string())).translation.mean;

@@ -9,13 +9,12 @@
 
 #include <algorithm>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "slam2d/eval/relation_error.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -56,11 +55,7 @@ class HectorRealData : public ::testing::TestWithParam<HectorLog> {};
 TEST_P(HectorRealData, RelationErrorBeatsScanMatchingOfKuemmerle2009) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const HectorLog& log = GetParam();
-  std::vector<LaserMessage> scans;
-  CarmenReader reader((data / log.log).string());
-  while (auto message = reader.next()) {
-    if (auto* laser = std::get_if<LaserMessage>(&*message)) scans.push_back(std::move(*laser));
-  }
+  const std::vector<LaserMessage> scans = test::laser_messages(test::read_log(data / log.log));
   const std::vector<Relation> relations = read_relations((data / log.relations).string());
   for (const bool odometry : {true, false}) {
     const RelationErrorResult result = run_hector(scans, relations, odometry);

@@ -32,6 +32,7 @@
 #include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/session.hpp"
 #include "slam2d/sim/fault_injection.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -151,11 +152,9 @@ TEST(LocalizationRealData, MclDoesNotDecideOnASpotTurnWithSpuriousReadings) {
   const std::string log = (data / "intel" / "intel.clf.gz").string();
   const Trajectory reference = intel_from_known_start(map, log, 1500);
   // As `slam2d perturb LOG --out L --fault spurious-short:p=0.05 --seed 1` writes it.
-  std::vector<SensorMessage> messages;
   CarmenReaderOptions as_logged;
   as_logged.repair_reverse_odometry = false;
-  CarmenReader reader(log, as_logged);
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
+  std::vector<SensorMessage> messages = test::read_log(log, as_logged);
   apply_faults({parse_fault("spurious-short:p=0.05")}, messages, 1);
   const test::TempDir dir;
   const std::string perturbed = (dir.path() / "perturbed.clf").string();
@@ -186,10 +185,8 @@ TEST(LocalizationRealData, MclDoesNotDecideOnASpotTurnWithSpuriousReadings) {
 TEST(LocalizationRealData, EkfAndMclFollowTheRobotThroughOdometryStalls) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const LocalizationMap& map = intel_map(data);
-  std::vector<SensorMessage> messages;
-  CarmenReader reader((data / "intel" / "intel.clf.gz").string());
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
-  apply_faults({parse_fault("stall:every=60,duration=3")}, messages, 1);
+  const std::vector<SensorMessage> messages =
+      test::read_log_with_fault(data / "intel" / "intel.clf.gz", "stall:every=60,duration=3");
   const std::vector<Relation> relations = read_relations((data / "intel" / "intel.relations").string());
   const auto run = [&](Localizer& localizer, const LocalizationMap* stall_map) {
     LocalizationSession session(localizer, std::nullopt, {}, stall_map);

@@ -16,7 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
-#include <variant>
+#include <utility>
 #include <vector>
 
 #include "slam2d/eval/relation_error.hpp"
@@ -27,6 +27,7 @@
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -41,26 +42,9 @@ struct StalledLog {
 
 void PrintTo(const StalledLog& log, std::ostream* os) { *os << log.name; }
 
-std::vector<SensorMessage> read_messages(const std::filesystem::path& log, const CarmenReaderOptions& options = {}) {
-  std::vector<SensorMessage> messages;
-  CarmenReader reader(log.string(), options);
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
-  return messages;
-}
-
-std::vector<LaserMessage> laser_messages(std::vector<SensorMessage>& messages) {
-  std::vector<LaserMessage> scans;
-  for (SensorMessage& message : messages) {
-    if (auto* laser = std::get_if<LaserMessage>(&message)) scans.push_back(std::move(*laser));
-  }
-  return scans;
-}
-
 // The log's laser messages after the fault (a stall unless said).
 std::vector<LaserMessage> stalled_scans(const std::filesystem::path& log, const std::string& fault = kStall) {
-  std::vector<SensorMessage> messages = read_messages(log);
-  apply_faults({parse_fault(fault)}, messages, 1);
-  return laser_messages(messages);
+  return test::laser_messages(test::read_log_with_fault(log, fault));
 }
 
 struct GraphRun {
@@ -212,12 +196,12 @@ TEST(OdometryStallRealData, HectorOnAcesStaysUnderFifteenCentimetresInEachOfThre
 TEST(HectorOdometryPriorRealData, IntelStaysAtItsCleanErrorUnderSmallRangeNoise) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());
-  const std::vector<SensorMessage> clean = read_messages(data / "intel/intel.clf.gz");
+  const std::vector<SensorMessage> clean = test::read_log(data / "intel/intel.clf.gz");
   for (const std::uint64_t seed : {1u, 2u, 3u}) {
     std::vector<SensorMessage> messages = clean;
     apply_faults({parse_fault("range-noise:sigma=0.01")}, messages, seed);
     HectorSlam slam;
-    for (const LaserMessage& laser : laser_messages(messages)) {
+    for (const LaserMessage& laser : test::laser_messages(std::move(messages))) {
       slam.add_scan(laser.scan, HectorInputs{.T_odom_robot = laser.odom_pose});
     }
     EXPECT_LT(relation_error(slam.trajectory(), relations).translation.mean, 0.03) << "seed " << seed;
@@ -230,8 +214,7 @@ TEST(HectorOdometryPriorRealData, GivesWayToFr079sReversingOdometryReadAsLogged)
   SLAM2D_REQUIRE_REAL_DATA(data);
   CarmenReaderOptions raw;
   raw.repair_reverse_odometry = false;
-  std::vector<SensorMessage> messages = read_messages(data / "fr079/fr079.clf.gz", raw);
-  const std::vector<LaserMessage> scans = laser_messages(messages);
+  const std::vector<LaserMessage> scans = test::laser_messages(test::read_log(data / "fr079/fr079.clf.gz", raw));
   const std::vector<Relation> relations = read_relations((data / "fr079/fr079.relations").string());
   for (const bool robust : {true, false}) {
     HectorSlamConfig config;
@@ -253,13 +236,12 @@ std::vector<LaserMessage> perturbed_scans(const std::filesystem::path& log, cons
                                           const CarmenReaderOptions& read_options) {
   CarmenReaderOptions as_logged;
   as_logged.repair_reverse_odometry = false;
-  std::vector<SensorMessage> messages = read_messages(log, as_logged);
+  std::vector<SensorMessage> messages = test::read_log(log, as_logged);
   apply_faults({parse_fault(fault)}, messages, 1);
   const test::TempDir dir;
   const std::filesystem::path perturbed = dir.path() / "perturbed.clf";
   write_carmen_log(perturbed.string(), {}, messages);
-  std::vector<SensorMessage> read_back = read_messages(perturbed, read_options);
-  return laser_messages(read_back);
+  return test::laser_messages(test::read_log(perturbed, read_options));
 }
 
 TEST(ReverseOdometryRealData, OnlyFr079IntegratesReversingAsForward) {

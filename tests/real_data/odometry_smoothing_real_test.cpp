@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "slam2d/eval/relation_error.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
 #include "slam2d/sim/fault_injection.hpp"
 #include "slam2d/slam/fusion/odometry_smoothing.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -27,11 +27,7 @@ double short_relation_error(const std::vector<SE2>& poses, const std::vector<dou
                             const std::vector<Relation>& relations) {
   Trajectory trajectory;
   for (std::size_t i = 0; i < poses.size(); ++i) trajectory.push_back(stamps[i], poses[i]);
-  std::vector<Relation> short_ones;
-  for (const Relation& r : relations) {
-    if (r.stamp_to - r.stamp_from <= 10.0) short_ones.push_back(r);
-  }
-  return relation_error(trajectory, short_ones).translation.mean;
+  return relation_error(trajectory, test::relations_at_most(relations, 10.0)).translation.mean;
 }
 
 struct Errors {
@@ -59,9 +55,7 @@ Errors run(std::vector<SensorMessage> messages, const std::vector<Relation>& rel
 
 TEST(OdometrySmoothingRealData, ANoisyLaserOverGoodOdometryDoesNoHarm) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  std::vector<SensorMessage> messages;
-  CarmenReader reader((data / "fr079/fr079.clf.gz").string());
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
+  const std::vector<SensorMessage> messages = test::read_log(data / "fr079/fr079.clf.gz");
   const std::vector<Relation> relations = read_relations((data / "fr079/fr079.relations").string());
 
   const Errors clean = run(messages, relations, "");

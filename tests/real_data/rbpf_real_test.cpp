@@ -6,18 +6,14 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "slam2d/eval/relation_error.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
-#include "slam2d/sim/fault_injection.hpp"
 #include "slam2d/slam/rbpf/rbpf_slam.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -25,11 +21,7 @@ namespace {
 
 TEST(RbpfRealData, Fr079WithFiveParticlesBeatsTheRbpfColumnOfKuemmerle2009) {
   SLAM2D_REQUIRE_REAL_DATA(data);
-  std::vector<LaserMessage> scans;
-  CarmenReader reader((data / "fr079/fr079.clf.gz").string());
-  while (auto message = reader.next()) {
-    if (auto* laser = std::get_if<LaserMessage>(&*message)) scans.push_back(std::move(*laser));
-  }
+  const std::vector<LaserMessage> scans = test::laser_messages(test::read_log(data / "fr079/fr079.clf.gz"));
   RbpfSlam slam({.particles = 5, .seed = 1});
   for (const LaserMessage& laser : scans) slam.add_scan(laser.scan, laser.odom_pose);
   const Trajectory trajectory = slam.trajectory();
@@ -46,16 +38,12 @@ TEST(RbpfRealData, Fr079WithFiveParticlesBeatsTheRbpfColumnOfKuemmerle2009) {
 // ACES's scans with `fault` injected (perturb's, seed 1), mapped with their odometry: the error on
 // the relations at most 10 s apart (m), the method's own poses (no smoothing).
 double aces_short_error_under(const std::filesystem::path& data, const std::string& fault, const RbpfConfig& config) {
-  std::vector<SensorMessage> messages;
-  CarmenReader reader((data / "aces/aces.clf.gz").string());
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
-  apply_faults({parse_fault(fault)}, messages, 1);
   RbpfSlam slam(config);
-  for (const SensorMessage& message : messages) {
-    if (const auto* laser = std::get_if<LaserMessage>(&message)) slam.add_scan(laser->scan, laser->odom_pose);
+  for (const LaserMessage& laser : test::laser_messages(test::read_log_with_fault(data / "aces/aces.clf.gz", fault))) {
+    slam.add_scan(laser.scan, laser.odom_pose);
   }
-  std::vector<Relation> relations = read_relations((data / "aces/aces.relations").string());
-  std::erase_if(relations, [](const Relation& r) { return std::abs(r.stamp_to - r.stamp_from) > 10.0; });
+  const std::vector<Relation> relations =
+      test::relations_at_most(read_relations((data / "aces/aces.relations").string()), 10.0);
   return relation_error(slam.trajectory(), relations).translation.mean;
 }
 

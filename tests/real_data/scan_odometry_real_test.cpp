@@ -18,11 +18,11 @@
 #include <cstdint>
 
 #include "slam2d/eval/relation_error.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
 #include "slam2d/registration/pl_icp.hpp"
 #include "slam2d/registration/scan_odometry.hpp"
 #include "slam2d/sim/fault_injection.hpp"
+#include "real_data/real_logs.hpp"
 #include "support/test_support.hpp"
 
 namespace slam2d {
@@ -53,13 +53,6 @@ Trajectory pl_icp_odometry(const std::vector<SensorMessage>& messages, Trajector
   return odometry.trajectory();
 }
 
-std::vector<SensorMessage> read_messages(const std::string& path) {
-  std::vector<SensorMessage> messages;
-  CarmenReader reader(path);
-  while (auto message = reader.next()) messages.push_back(std::move(*message));
-  return messages;
-}
-
 void PrintTo(const OdometryLog& log, std::ostream* os) { *os << log.name; }
 
 class ScanOdometryRealData : public ::testing::TestWithParam<OdometryLog> {};
@@ -70,7 +63,7 @@ TEST_P(ScanOdometryRealData, PlIcpBeatsWheelOdometryOnRelations) {
   const std::vector<Relation> relations = read_relations((data / log.relations).string());
   Trajectory wheel;
   std::size_t failures = 0;
-  const Trajectory trajectory = pl_icp_odometry(read_messages((data / log.log).string()), &wheel, &failures);
+  const Trajectory trajectory = pl_icp_odometry(test::read_log(data / log.log), &wheel, &failures);
   const RelationErrorResult matched = relation_error(trajectory, relations);
   const RelationErrorResult raw = relation_error(wheel, relations);
   std::cout << "[ measured ] " << log.name << ": pl-icp " << matched.translation.mean << " m / "
@@ -88,7 +81,7 @@ TEST_P(ScanOdometryRealData, MedianOverRangeNoiseSeedsStaysBounded) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const OdometryLog& log = GetParam();
   const std::vector<Relation> relations = read_relations((data / log.relations).string());
-  const std::vector<SensorMessage> clean = read_messages((data / log.log).string());
+  const std::vector<SensorMessage> clean = test::read_log(data / log.log);
   std::vector<double> errors;
   for (const std::uint64_t seed : {1u, 2u, 3u}) {
     std::vector<SensorMessage> messages = clean;

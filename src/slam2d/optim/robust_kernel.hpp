@@ -39,6 +39,11 @@ struct RobustKernel {
   double kernel_weight(double residual) const;  // weight() of the other kernels
 };
 
+/// The kernel on an odometry prior's Mahalanobis distance: Cauchy at 2 sigma, so the scan wins where
+/// the odometry is many sigmas off (Hector's prior, picked as docs/defaults.md says; the RBPF's
+/// per-scan matching with its prior from the learnt motion noise).
+inline constexpr RobustKernel kOdometryPriorKernel{.type = RobustKernelType::kCauchy, .scale = 2.0};
+
 template <typename Fields>
 void describe(Fields& f, RobustKernel& c) {
   f.choice("type", c.type, "rho(r): none (r^2 / 2), huber, cauchy or tukey (biweight)");

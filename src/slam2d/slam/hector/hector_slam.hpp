@@ -20,6 +20,7 @@
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
 #include "slam2d/registration/match_fusion.hpp"
+#include "slam2d/optim/robust_kernel.hpp"
 #include "slam2d/registration/occupancy_gradient_match.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
 
@@ -68,7 +69,7 @@ struct HectorSlamConfig {
   double prior_information_translation = 1000.0;
   double prior_information_rotation = 0.0;
   double prior_sigma_per_metre = 0.1;
-  RobustKernel prior_kernel{.type = RobustKernelType::kCauchy, .scale = 2.0};
+  RobustKernel prior_kernel = kOdometryPriorKernel;
   // A catch-up's increment spans a freeze of seconds, which the per-scan sigma does not describe:
   // Intel with 3 s odometry gaps scores 0.16 m with the prior there, 0.027 m without (graph
   // SLAM's tracker keeps its weaker prior there: the sparse corrected logs need it).

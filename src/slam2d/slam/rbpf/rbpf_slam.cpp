@@ -16,6 +16,7 @@
 #include "slam2d/core/scan_preprocessing.hpp"
 #include "slam2d/core/thread_sanitizer.hpp"
 #include "slam2d/core/resampling.hpp"
+#include "slam2d/optim/robust_kernel.hpp"
 
 namespace slam2d {
 
@@ -40,7 +41,7 @@ RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
   matching.motion_prior_weight = config.scan_odometry_prior_weight;
   if (config.scan_odometry_prior_from_motion_noise) {  // the exact product under Hector's kernel
     matching.motion_prior_weight = 1.0;
-    matching.motion_prior_kernel = {.type = RobustKernelType::kCauchy, .scale = 2.0};
+    matching.motion_prior_kernel = kOdometryPriorKernel;
   }
   matching.matcher.rotation_search_range = config.scan_odometry_rotation_search;
   matching.matcher.rotation_search_step = config.scan_odometry_rotation_step;
@@ -247,7 +248,8 @@ Eigen::Vector3d RbpfSlam::scan_odometry_sigmas(const SE2& delta) const {
 // teaches nothing).
 void RbpfSlam::learn_odometry_noise(const OdometryCheck& odometry, const SE2& delta, const SE2& previous,
                                     const ProposalResult& match) {
-  if (config_.scan_odometry_prior_from_motion_noise && odometry.trusted() && match.matched) {
+  if (!config_.scan_odometry_prior_from_motion_noise) return;
+  if (odometry.trusted() && match.matched) {
     scan_odometry_noise_.observe(delta, previous.between(match.x_star),
                                  rotate_covariance(last_match_covariance_ + match.match_covariance, -previous.theta()));
   }

@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "real_data/real_logs.hpp"
+
+#include <cmath>
+#include <utility>
+#include <variant>
+
+#include "slam2d/sim/fault_injection.hpp"
+
+namespace slam2d::test {
+
+std::vector<SensorMessage> read_log(const std::filesystem::path& log, const CarmenReaderOptions& options) {
+  std::vector<SensorMessage> messages;
+  CarmenReader reader(log.string(), options);
+  while (auto message = reader.next()) messages.push_back(std::move(*message));
+  return messages;
+}
+
+std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log, const std::string& fault,
+                                               std::uint64_t seed) {
+  std::vector<SensorMessage> messages = read_log(log);
+  apply_faults({parse_fault(fault)}, messages, seed);
+  return messages;
+}
+
+std::vector<LaserMessage> laser_messages(std::vector<SensorMessage> messages) {
+  std::vector<LaserMessage> scans;
+  for (SensorMessage& message : messages) {
+    if (auto* laser = std::get_if<LaserMessage>(&message)) scans.push_back(std::move(*laser));
+  }
+  return scans;
+}
+
+std::vector<Relation> relations_at_most(std::vector<Relation> relations, double seconds) {
+  std::erase_if(relations, [seconds](const Relation& r) { return !(std::abs(r.stamp_to - r.stamp_from) <= seconds); });
+  return relations;
+}
+
+}  // namespace slam2d::test
