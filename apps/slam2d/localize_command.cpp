@@ -28,6 +28,7 @@
 #include "slam2d/io/trajectory_io.hpp"
 #include "slam2d/grid/render.hpp"
 #include "slam2d/localization/mcl.hpp"
+#include "slam2d/localization/motion_model.hpp"
 #include "slam2d/localization/session.hpp"
 
 namespace slam2d::cli {
@@ -98,6 +99,11 @@ void run_localize(const LocalizeOptions& options) {
   summary.add("global", options.global).add("scans", run.scans).add("sensor_updates", run.sensor_updates);
   summary.add("cpu_s", cpu).add("localizer_cpu_s", run.localizer_cpu_s);
   summary.add("us_per_update", 1e6 * run.localizer_cpu_s / static_cast<double>(std::max<std::size_t>(run.sensor_updates, 1)));
+  if (const MotionNoiseLearner* noise = localizer->motion_noise(); noise != nullptr && noise->stretches() > 0) {
+    summary.add("odometry_noise_stretches", noise->stretches());
+    summary.add("odometry_noise_scale_translation", noise->translation_scale());
+    summary.add("odometry_noise_scale_rotation", noise->rotation_scale());
+  }
   summary.add("converged_at_s", run.converged_at_s);
   summary.add("localized_fraction", static_cast<double>(run.localized_scans) / static_cast<double>(run.scans));
   summary.add("lost_events", run.lost_events);

@@ -98,6 +98,58 @@ TEST(OdometryMotionModel, BackwardDrivingIsNotAHalfTurnOfNoise) {
   EXPECT_TRUE(control_covariance(backward, config).isApprox(control_covariance(forward, config), 1e-12));
 }
 
+// A robot driving a winding path; its odometry moves by controls perturbed with k_t (k_r) times
+// the model's translation (rotation) noise, its pose measured every step with known noise. The
+// learner finds k_t and k_r, each apart: a heading error moves the robot sideways, and that share
+// is the rotation's, not the translation's.
+TEST(MotionNoiseLearner, FindsTheScalesOfTheOdometrysNoise) {
+  const OdometryMotionConfig model;
+  const MotionNoiseLearningConfig learning{.window = 100.0, .min_scale = 0.2, .max_scale = 20.0};
+  const double measured_xy = 0.01;
+  const double measured_theta = 0.005;
+  for (const auto& [k_t, k_r] : {std::pair{3.0, 3.0}, std::pair{0.6, 0.6}, std::pair{3.0, 0.7}, std::pair{0.7, 3.0}}) {
+    Rng rng(11);
+    MotionNoiseLearner learner(model, learning);
+    SE2 truth;
+    SE2 odometry;
+    for (int i = 0; i < 6000; ++i) {
+      const OdometryControl u{.rot1 = 0.05 * rng.gaussian(), .trans = 0.05, .rot2 = 0.05 * rng.gaussian()};
+      const Eigen::Vector3d sigma = control_covariance(u, model).diagonal().cwiseSqrt();
+      const OdometryControl noisy{.rot1 = u.rot1 + k_r * sigma(0) * rng.gaussian(),
+                                  .trans = u.trans + k_t * sigma(1) * rng.gaussian(),
+                                  .rot2 = u.rot2 + k_r * sigma(2) * rng.gaussian()};
+      const SE2 next_odometry = apply_odometry(odometry, noisy);
+      learner.move(decompose_odometry(odometry, next_odometry));
+      odometry = next_odometry;
+      truth = apply_odometry(truth, u);
+      const SE2 measured(truth.x() + measured_xy * rng.gaussian(), truth.y() + measured_xy * rng.gaussian(),
+                         truth.theta() + measured_theta * rng.gaussian());
+      learner.measured(measured, covariance_from_sigmas(measured_xy, measured_xy, measured_theta));
+    }
+    EXPECT_GT(learner.stretches(), 400u);
+    EXPECT_NEAR(learner.translation_scale(), k_t, 0.2 * k_t) << k_t << " " << k_r;
+    EXPECT_NEAR(learner.rotation_scale(), k_r, 0.2 * k_r) << k_t << " " << k_r;
+    // The model it hands the filter is the one the odometry was drawn from, up to the estimate.
+    EXPECT_NEAR(learner.model().alpha3 / model.alpha3, learner.translation_scale() * learner.translation_scale(), 1e-12);
+    EXPECT_NEAR(learner.model().alpha1 / model.alpha1, learner.rotation_scale() * learner.rotation_scale(), 1e-12);
+  }
+}
+
+TEST(MotionNoiseLearner, AWindowOfZeroKeepsTheModel) {
+  const OdometryMotionConfig model;
+  MotionNoiseLearner learner(model, MotionNoiseLearningConfig{.window = 0.0});
+  SE2 odometry;
+  for (int i = 0; i < 100; ++i) {
+    const SE2 next = odometry * SE2(0.1, 0.0, 0.0);
+    learner.move(decompose_odometry(odometry, next));
+    odometry = next;
+    learner.measured(SE2(0.3 * i, 0.0, 0.0), covariance_from_sigmas(0.01, 0.01, 0.01));  // 3x the odometry's motion
+  }
+  EXPECT_EQ(learner.stretches(), 0u);
+  EXPECT_EQ(learner.model().alpha3, model.alpha3);
+  EXPECT_EQ(learner.model().alpha1, model.alpha1);
+}
+
 TEST(KldSampling, BoundMatchesFoxEquation10) {
   // k = 100, eps = 0.05, z = 2.326: 99 / 0.1 * (1 - 2/891 + sqrt(2/891) 2.326)^3 = 1346.6.
   EXPECT_EQ(kld_particle_count(100, 0.05, 2.326), 1347u);

@@ -15,6 +15,7 @@
 #include "slam2d/localization/markov_grid.hpp"
 #include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/session.hpp"
+#include "slam2d/sim/fault_injection.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/sim/world.hpp"
 #include "support/simulated_office.hpp"
@@ -78,6 +79,40 @@ TEST(OfficeLocalization, EkfTracksFromAKnownStart) {
   EXPECT_GT(ekf.stats().accepted, ekf.stats().updates * 9 / 10);
   // Honest covariance: the error stays within a few sigmas.
   EXPECT_LT(std::sqrt(ekf.covariance()(0, 0)), 0.1);
+}
+
+// The office run with its odometry given a random walk (perturb's odom-noise) `level` times the
+// localization benchmark's 1x (bench/datasets/localize_benchmark.py).
+SimulatedRun noisy_odometry_run(double level) {
+  SimulatedRun run = office_run();
+  const std::string spec = "odom-noise:translation=" + std::to_string(0.1 * level) +
+                           ",heading=" + std::to_string(0.04 * level) + ",rotation=" + std::to_string(0.1 * level);
+  apply_faults({parse_fault(spec)}, run.messages, 3);
+  return run;
+}
+
+// Odometry worse than the EKF's motion model: with the model fixed the filter trusts its
+// prediction too much, its search window stays narrow and it falls behind; with the noise learnt
+// from its matches it keeps tracking (issue 40: each measurement weighed by its own uncertainty).
+TEST(OfficeLocalization, EkfLearnsAnOdometryWorseThanItsModel) {
+  const SimulatedRun noisy = noisy_odometry_run(4.0);
+  const auto mean_error = [&](const EkfConfig& config, double* translation_scale) {
+    EkfLocalization ekf(office_map(), config);
+    ekf.initialize(start_guess(), start_covariance());
+    const RunResult result = test::run_localization(ekf, noisy);
+    if (translation_scale != nullptr) *translation_scale = ekf.motion_noise()->translation_scale();
+    double sum = 0.0;
+    for (std::size_t i = 10; i < result.errors.size(); ++i) sum += result.errors[i];
+    return sum / static_cast<double>(result.errors.size() - 10);
+  };
+  EkfConfig fixed;
+  fixed.motion_noise.window = 0.0;
+  double scale = 0.0;
+  const double learnt_error = mean_error(EkfConfig{}, &scale);
+  const double fixed_error = mean_error(fixed, nullptr);
+  EXPECT_GT(scale, 1.5);
+  EXPECT_LT(learnt_error, 0.06);
+  EXPECT_LT(learnt_error, 0.7 * fixed_error);
 }
 
 TEST(OfficeLocalization, MarkovGridTracksFromAKnownStart) {

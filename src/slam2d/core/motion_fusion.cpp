@@ -23,15 +23,6 @@ Eigen::Vector3d difference(const SE2& a, const SE2& b) {
 
 bool unknown(const Covariance3& covariance) { return covariance.diagonal().maxCoeff() >= kUnknownVariance; }
 
-// One sample of a squared scale: (the residual's variance per degree of freedom, clipped at the
-// gate of the current total, less the measurement's) over the model's, within the bounds.
-double scale2_sample(double residual2_per_dof, double model_variance, double measured_variance, double scale2,
-                     const OdometryNoiseConfig& config) {
-  const double clip = kMotionGateChi2 / 3.0 * (scale2 * model_variance + measured_variance);
-  const double sample = (std::min(residual2_per_dof, clip) - measured_variance) / model_variance;
-  return std::clamp(sample, config.min_scale * config.min_scale, config.max_scale * config.max_scale);
-}
-
 }  // namespace
 
 void validate(const OdometryNoiseConfig& config) {
@@ -39,7 +30,26 @@ void validate(const OdometryNoiseConfig& config) {
   check(config.min_scale <= 1.0, "OdometryNoiseConfig: min_scale must be <= 1");
 }
 
-OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config) : config_(config) { validate(config_); }
+NoiseScaleEstimate::NoiseScaleEstimate(double window, double min_scale, double max_scale)
+    : window_(window), min_scale_(min_scale), max_scale_(max_scale) {}
+
+void NoiseScaleEstimate::observe(double residual2_per_dof, double model_variance, double other_variance) {
+  if (window_ <= 0.0) return;
+  ++observations_;
+  const double weight = 1.0 / std::min(static_cast<double>(observations_), window_);
+  double scale2 = scale_ * scale_;
+  const double clip = kMotionGateChi2 / 3.0 * (scale2 * model_variance + other_variance);
+  const double sample = (std::min(residual2_per_dof, clip) - other_variance) / model_variance;
+  scale2 += weight * (std::clamp(sample, min_scale_ * min_scale_, max_scale_ * max_scale_) - scale2);
+  scale_ = std::sqrt(scale2);
+}
+
+OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config)
+    : config_(config),
+      translation_scale_(config.window, config.min_scale, config.max_scale),
+      rotation_scale_(config.window, config.min_scale, config.max_scale) {
+  validate(config_);
+}
 
 double OdometryNoiseModel::sigma_translation(const SE2& increment) const {
   return config_.rest_translation + config_.translation_per_metre * increment.translation().norm() +
@@ -52,26 +62,17 @@ double OdometryNoiseModel::sigma_rotation(const SE2& increment) const {
 }
 
 Covariance3 OdometryNoiseModel::covariance(const SE2& increment) const {
-  const double translation = translation_scale_ * sigma_translation(increment);
-  return covariance_from_sigmas(translation, translation, rotation_scale_ * sigma_rotation(increment));
+  const double translation = translation_scale() * sigma_translation(increment);
+  return covariance_from_sigmas(translation, translation, rotation_scale() * sigma_rotation(increment));
 }
 
 void OdometryNoiseModel::observe(const SE2& increment, const SE2& measured, const Covariance3& measured_covariance) {
   if (config_.window <= 0.0 || unknown(measured_covariance)) return;
   const Eigen::Vector3d e = difference(increment, measured);
   if (!e.allFinite()) return;
-  ++observations_;
-  const double weight = 1.0 / std::min(static_cast<double>(observations_), config_.window);
-  const double translation_model = std::pow(sigma_translation(increment), 2);
-  const double translation_measured = 0.5 * (measured_covariance(0, 0) + measured_covariance(1, 1));
-  double scale2 = translation_scale_ * translation_scale_;
-  scale2 += weight * (scale2_sample(0.5 * e.head<2>().squaredNorm(), translation_model, translation_measured, scale2,
-                                    config_) - scale2);
-  translation_scale_ = std::sqrt(scale2);
-  const double rotation_model = std::pow(sigma_rotation(increment), 2);
-  scale2 = rotation_scale_ * rotation_scale_;
-  scale2 += weight * (scale2_sample(e.z() * e.z(), rotation_model, measured_covariance(2, 2), scale2, config_) - scale2);
-  rotation_scale_ = std::sqrt(scale2);
+  translation_scale_.observe(0.5 * e.head<2>().squaredNorm(), std::pow(sigma_translation(increment), 2),
+                             0.5 * (measured_covariance(0, 0) + measured_covariance(1, 1)));
+  rotation_scale_.observe(e.z() * e.z(), std::pow(sigma_rotation(increment), 2), measured_covariance(2, 2));
 }
 
 FusedMotion fuse_motion(const MotionMeasurement& odometry, const MotionMeasurement& match, double gate_chi2) {

@@ -61,6 +61,28 @@ void describe(Fields& f, OdometryNoiseConfig& c) {
 /// Throws Error for out-of-range values.
 void validate(const OdometryNoiseConfig& config);
 
+/// A noise model's scale learnt online by covariance matching: the mean, over the last `window`
+/// samples, of (residual^2 per degree of freedom - the variance the residual carries besides the
+/// model's) / the model's variance, each residual clipped at the chi-square gate of the current
+/// total (so one wrong sample cannot blow the model up), the squared scale kept within
+/// [min_scale^2, max_scale^2]. It starts at 1; window 0 keeps it there.
+class NoiseScaleEstimate {
+ public:
+  NoiseScaleEstimate(double window, double min_scale, double max_scale);
+
+  void observe(double residual2_per_dof, double model_variance, double other_variance);
+
+  double scale() const { return scale_; }
+  std::size_t observations() const { return observations_; }
+
+ private:
+  double window_;
+  double min_scale_;
+  double max_scale_;
+  double scale_ = 1.0;
+  std::size_t observations_ = 0;
+};
+
 /// The odometry's motion noise with its online scales (translation and rotation).
 class OdometryNoiseModel {
  public:
@@ -73,9 +95,9 @@ class OdometryNoiseModel {
   /// scan match (with its covariance). Call it only with matches the caller accepted.
   void observe(const SE2& increment, const SE2& measured, const Covariance3& measured_covariance);
 
-  double translation_scale() const { return translation_scale_; }
-  double rotation_scale() const { return rotation_scale_; }
-  std::size_t observations() const { return observations_; }
+  double translation_scale() const { return translation_scale_.scale(); }
+  double rotation_scale() const { return rotation_scale_.scale(); }
+  std::size_t observations() const { return translation_scale_.observations(); }
   const OdometryNoiseConfig& config() const { return config_; }
 
  private:
@@ -83,9 +105,8 @@ class OdometryNoiseModel {
   double sigma_rotation(const SE2& increment) const;
 
   OdometryNoiseConfig config_;
-  double translation_scale_ = 1.0;
-  double rotation_scale_ = 1.0;
-  std::size_t observations_ = 0;
+  NoiseScaleEstimate translation_scale_;
+  NoiseScaleEstimate rotation_scale_;
 };
 
 /// A measured increment T_a_b with its covariance (in frame a's coordinates x, y, theta).

@@ -36,7 +36,7 @@ PointCloud2 occupied_cells(const LocalizationMap& map) {
 }  // namespace
 
 EkfLocalization::EkfLocalization(const LocalizationMap& map, const EkfConfig& config)
-    : map_(map), config_(config), status_(config.status) {
+    : map_(map), config_(config), status_(config.status), motion_noise_(config.motion, config.motion_noise) {
   validate(config_);
   const PointCloud2 obstacles = occupied_cells(map_);
   check(!obstacles.empty(), "ekf: the map has no occupied cells to match against");
@@ -55,6 +55,7 @@ void EkfLocalization::initialize(const SE2& T_map_robot, const Covariance3& cova
   started_ = false;
   rejections_ = 0;
   status_.reset();
+  motion_noise_.restart();
 }
 
 bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) {
@@ -89,6 +90,7 @@ bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) 
   const Eigen::Vector3d correction = posterior * R_inverse * innovation;
   pose_ = SE2(pose_.x() + correction.x(), pose_.y() + correction.y(), pose_.theta() + correction.z());
   covariance_ = make_positive_definite(0.5 * (posterior + posterior.transpose()), 1e-10);
+  motion_noise_.measured(match.T_target_source, coarse.covariance);
   ++stats_.accepted;
   return true;
 }
@@ -96,8 +98,9 @@ bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) 
 LocalizationEstimate EkfLocalization::update(const SE2& T_odom_robot, const LaserScan& scan) {
   check(initialized_, "ekf: initialize() before update()");
   if (started_) {
-    const MotionPrediction prediction =
-        predict_odometry_motion(pose_, covariance_, decompose_odometry(last_odom_, T_odom_robot), config_.motion);
+    const OdometryControl u = decompose_odometry(last_odom_, T_odom_robot);
+    const MotionPrediction prediction = predict_odometry_motion(pose_, covariance_, u, motion_noise_.model());
+    motion_noise_.move(u);
     pose_ = prediction.pose;
     covariance_ = prediction.covariance;
   }

@@ -67,6 +67,8 @@ struct EkfConfig {
   // measurements, and the Hessian covariance of ~90 correlated end points is optimistic.
   double measurement_sigma_xy = 0.1;
   double measurement_sigma_theta = 0.05;
+  // The odometry's noise learnt from the accepted matches (MotionNoiseLearner, motion_model.hpp).
+  MotionNoiseLearningConfig motion_noise{};
   LocalizationStatusConfig status{};
 };
 
@@ -90,6 +92,7 @@ void describe(Fields& f, EkfConfig& c) {
   f.number("rejection_sigma_theta", c.rejection_sigma_theta, "rad", any_value(), "... in heading");
   f.number("measurement_sigma_xy", c.measurement_sigma_xy, "m", any_value(), "added to the matcher's covariance");
   f.number("measurement_sigma_theta", c.measurement_sigma_theta, "rad", any_value(), "... in heading");
+  f.section("motion_noise", c.motion_noise, "the motion noise's scales learnt from the accepted matches");
   f.section("status", c.status, "when the estimate counts as localized or lost");
 }
 
@@ -121,6 +124,7 @@ class EkfLocalization : public Localizer {
   bool lost() const { return rejections_ >= config_.lost_after_rejections; }
   const SE2& pose() const { return pose_; }
   const Covariance3& covariance() const { return covariance_; }
+  const MotionNoiseLearner* motion_noise() const override { return &motion_noise_; }
 
  private:
   /// Matches and fuses; returns true when the measurement passed the gates.
@@ -135,6 +139,7 @@ class EkfLocalization : public Localizer {
   SE2 pose_;
   Covariance3 covariance_ = Covariance3::Identity();
   LocalizationStatus status_;
+  MotionNoiseLearner motion_noise_;
   int rejections_ = 0;
   EkfStats stats_;
 };

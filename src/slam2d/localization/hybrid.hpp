@@ -48,6 +48,7 @@ class HybridLocalization : public Localizer {
   bool ekf_active() const { return ekf_active_; }
   std::size_t handovers() const { return handovers_; }  // grid -> EKF starts
   const EkfLocalization& ekf() const { return ekf_; }
+  const MotionNoiseLearner* motion_noise() const override { return ekf_.motion_noise(); }
   const MarkovGridLocalization& grid() const { return grid_; }
 
  private:

@@ -19,6 +19,8 @@
 
 namespace slam2d {
 
+class MotionNoiseLearner;  // motion_model.hpp
+
 struct LocalizationEstimate {
   SE2 pose;                                          // T_map_robot
   Covariance3 covariance = Covariance3::Identity();  // m^2, m rad, rad^2
@@ -88,6 +90,8 @@ class Localizer {
   /// Sensor updates done so far (filters skip them while the robot stands still).
   virtual std::size_t sensor_updates() const = 0;
   virtual std::string name() const = 0;
+  /// The odometry's motion noise the localizer learnt (motion_model.hpp), if it learns one.
+  virtual const MotionNoiseLearner* motion_noise() const { return nullptr; }
 };
 
 }  // namespace slam2d

@@ -62,7 +62,7 @@ void weighted_pose_statistics(const std::vector<SE2>& poses, const std::vector<d
 }
 
 MonteCarloLocalization::MonteCarloLocalization(const LocalizationMap& map, const MclConfig& config)
-    : map_(map), config_(config), rng_(config.seed), status_(config.status) {
+    : map_(map), config_(config), motion_noise_(config.motion, config.motion_noise), rng_(config.seed), status_(config.status) {
   validate(config_);
 }
 
@@ -84,6 +84,7 @@ void MonteCarloLocalization::initialize(const SE2& T_map_robot, const Covariance
   averages_started_ = false;
   status_.reset();
   drop_recovery();
+  motion_noise_.restart();
 }
 
 void MonteCarloLocalization::initialize_global() {
@@ -99,12 +100,14 @@ void MonteCarloLocalization::initialize_global() {
   averages_started_ = false;
   status_.reset();
   drop_recovery();
+  motion_noise_.restart();
 }
 
 void MonteCarloLocalization::predict(const OdometryControl& u) {
-  const Eigen::Vector3d sigmas = control_covariance(u, config_.motion).diagonal().cwiseSqrt();
+  const Eigen::Vector3d sigmas = control_covariance(u, motion_noise_.model()).diagonal().cwiseSqrt();
   for (SE2& p : particles_) p = sample_odometry_motion(p, u, sigmas, rng_);
   for (SE2& p : recovery_) p = sample_odometry_motion(p, u, sigmas, rng_);
+  motion_noise_.move(u);
   place_travel_ += std::abs(u.trans);
 }
 
@@ -438,8 +441,21 @@ LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, con
   const ScanBeams beams = select_beams(scan, config_.max_beams, config_.usable_range);
   weigh(beams);
   estimate_ = summarize(beams);
+  learn_motion_noise(beams);
   resample();
   return estimate_;
+}
+
+// The scan matched against the map at the estimate, where the learner wants a measurement: only
+// while localized on one place (a match at the mean of two places, or of a lost set, is no
+// measurement), and only a match that explains the scan.
+void MonteCarloLocalization::learn_motion_noise(const ScanBeams& beams) {
+  if (!motion_noise_.wants_measurement()) return;
+  if (!estimate_.localized || searching_ || !place_log_likelihood_.empty()) return motion_noise_.restart();
+  const MatchResult match =
+      match_likelihood_field(map_.field(), beams.points_robot, estimate_.pose, config_.motion_noise_matcher);
+  if (match.inlier_fraction < 0.5) return motion_noise_.restart();
+  motion_noise_.measured(match.T_target_source, match.covariance);
 }
 
 }  // namespace slam2d

@@ -79,6 +79,7 @@
 #include "slam2d/localization/localizer.hpp"
 #include "slam2d/localization/motion_model.hpp"
 #include "slam2d/localization/sensor_model.hpp"
+#include "slam2d/registration/likelihood_field_match.hpp"
 
 namespace slam2d {
 
@@ -125,6 +126,12 @@ struct MclConfig {
   int takeover_updates = 30;
   int recovery_updates = 10;
   int displaced_updates = 100;
+  // The odometry's noise learnt from scan matches against the map at the estimate while localized
+  // (MotionNoiseLearner, motion_model.hpp; the match: registration/likelihood_field_match.hpp).
+  // It only widens the model: a particle set needs more spread than the odometry's own noise (its
+  // sensor model is sharper than the map supports), so the configured model is the floor.
+  MotionNoiseLearningConfig motion_noise{.min_scale = 1.0};
+  LikelihoodFieldMatchConfig motion_noise_matcher{};
   LocalizationStatusConfig status{};
   std::uint64_t seed = 1;
 };
@@ -171,6 +178,8 @@ void describe(Fields& f, MclConfig& c) {
            "sensor updates the recovery set searches on after the last injection");
   f.number("displaced_updates", c.displaced_updates, "1", at_least(1),
            "sensor updates a displaced tracked set is kept after a takeover");
+  f.section("motion_noise", c.motion_noise, "the motion noise's scales learnt from scan matches while localized");
+  f.section("motion_noise_matcher", c.motion_noise_matcher, "the scan match at the estimate that motion_noise learns from");
   f.section("status", c.status, "when the estimate counts as localized or lost");
   f.number("seed", c.seed, "1", any_value(), "of every random draw");
 }
@@ -201,6 +210,7 @@ class MonteCarloLocalization : public Localizer {
   LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
   std::size_t sensor_updates() const override { return sensor_updates_; }
   std::string name() const override { return "mcl"; }
+  const MotionNoiseLearner* motion_noise() const override { return &motion_noise_; }
 
   // The steps, for tests and benchmarks.
   void predict(const OdometryControl& u);
@@ -224,8 +234,11 @@ class MonteCarloLocalization : public Localizer {
   const MclConfig& config() const { return config_; }
 
  private:
+  void learn_motion_noise(const ScanBeams& beams);
+
   const LocalizationMap& map_;
   MclConfig config_;
+  MotionNoiseLearner motion_noise_;
   Rng rng_;
   std::vector<SE2> particles_;
   std::vector<double> weights_;  // normalised after weigh()

@@ -86,4 +86,91 @@ MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& cov
   return prediction;
 }
 
+namespace {
+
+OdometryMotionConfig translation_noise_of(OdometryMotionConfig model) {
+  model.alpha1 = model.alpha2 = model.min_rotation_sigma = 0.0;
+  return model;
+}
+
+OdometryMotionConfig rotation_noise_of(OdometryMotionConfig model) {
+  model.alpha3 = model.alpha4 = model.min_translation_sigma = 0.0;
+  return model;
+}
+
+}  // namespace
+
+MotionNoiseLearner::MotionNoiseLearner(const OdometryMotionConfig& model, const MotionNoiseLearningConfig& config)
+    : model_(model),
+      translation_noise_(translation_noise_of(model)),
+      rotation_noise_(rotation_noise_of(model)),
+      config_(config),
+      scaled_(model),
+      translation_(config.window, config.min_scale, config.max_scale),
+      rotation_(config.window, config.min_scale, config.max_scale) {
+  check_fields(config_, "MotionNoiseLearningConfig");
+}
+
+void MotionNoiseLearner::move(const OdometryControl& u) {
+  if (!anchored_ || config_.window <= 0.0) return;
+  // The covariance propagates linearly (G P G^T + V M V^T): the two shares add up to the model's.
+  from_translation_ = predict_odometry_motion(stretch_, from_translation_, u, translation_noise_).covariance;
+  const MotionPrediction rotation = predict_odometry_motion(stretch_, from_rotation_, u, rotation_noise_);
+  from_rotation_ = rotation.covariance;
+  stretch_ = rotation.pose;
+  travelled_ += std::abs(u.trans);
+  turned_ += std::abs(u.rot1) + std::abs(u.rot2);
+}
+
+void MotionNoiseLearner::start(const SE2& pose, const Covariance3& covariance) {
+  anchored_ = true;
+  anchor_ = pose;
+  anchor_covariance_ = covariance;
+  stretch_ = SE2();
+  from_translation_ = from_rotation_ = Covariance3::Zero();
+  travelled_ = turned_ = 0.0;
+}
+
+namespace {
+
+double planar(const Covariance3& c) { return 0.5 * (c(0, 0) + c(1, 1)); }
+
+constexpr double kTiny = 1e-12;  // a variance this small teaches nothing
+
+}  // namespace
+
+// The residual is the odometry's drift beside the two measurements' noise; the translation's
+// carries the rotation noise's share too, at its learnt scale.
+void MotionNoiseLearner::learn_odometry_noise(const Eigen::Vector3d& e, const Covariance3& measured) {
+  if (from_rotation_(2, 2) > kTiny) rotation_.observe(e.z() * e.z(), from_rotation_(2, 2), measured(2, 2));
+  const double r2 = rotation_.scale() * rotation_.scale();
+  if (planar(from_translation_) > kTiny) {
+    translation_.observe(0.5 * e.head<2>().squaredNorm(), planar(from_translation_), planar(measured) + r2 * planar(from_rotation_));
+  }
+  const double t = translation_.scale();
+  const double r = rotation_.scale();
+  scaled_ = model_;
+  scaled_.alpha1 *= r * r;
+  scaled_.alpha2 *= r * r;
+  scaled_.min_rotation_sigma *= r;
+  scaled_.alpha3 *= t * t;
+  scaled_.alpha4 *= t * t;
+  scaled_.min_translation_sigma *= t;
+}
+
+void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance) {
+  if (!wants_measurement()) return;
+  // A measurement of unknown uncertainty can neither end nor start a stretch.
+  if (covariance.diagonal().maxCoeff() >= kUnknownVariance || !covariance.allFinite()) return restart();
+  if (!anchored_) return start(pose, covariance);
+  // In the anchor's frame: the measured increment with the two measurements' covariances against
+  // the odometry's.
+  const SE2 increment = anchor_.between(pose);
+  const Covariance3 measured = rotate_covariance(anchor_covariance_ + covariance, -anchor_.theta());
+  Eigen::Vector3d e = increment.vector() - stretch_.vector();
+  e.z() = angle_difference(increment.theta(), stretch_.theta());
+  if (e.allFinite()) learn_odometry_noise(e, measured);
+  start(pose, covariance);
+}
+
 }  // namespace slam2d

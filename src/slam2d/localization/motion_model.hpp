@@ -20,6 +20,7 @@
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
+#include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
 
@@ -77,5 +78,79 @@ struct MotionPrediction {
 };
 MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& covariance, const OdometryControl& u,
                                          const OdometryMotionConfig& config);
+
+/// The motion noise learnt online (issue 40, docs/fusion_by_uncertainty.md, "The localizers"):
+/// over each stretch between two pose measurements (scan matches against the map) that is at least
+/// span_distance long or turns at least span_angle, the odometry's increment against the measured
+/// one. Translation and rotation each get a scale (NoiseScaleEstimate, core/motion_fusion.hpp)
+/// that multiplies the model's standard deviations: alpha3, alpha4 and the translation floor for
+/// the translation, alpha1, alpha2 and the rotation floor for the rotation. The translation's
+/// residual carries the rotation noise's share too (a heading error moves the robot sideways):
+/// the stretch's covariance is propagated in the two shares, and the rotation's, at its current
+/// scale, counts as known when the translation's scale is learnt. A stretch rather than a step,
+/// because over one step a map match's noise hides the odometry's; over half a metre the
+/// odometry's grows above it.
+struct MotionNoiseLearningConfig {
+  double window = 100.0;  // stretches the scales average over; 0: the fixed model
+  double min_scale = 0.5;
+  double max_scale = 10.0;
+  double span_distance = 0.5;  // m
+  double span_angle = 0.5;     // rad
+};
+
+template <typename Fields>
+void describe(Fields& f, MotionNoiseLearningConfig& c) {
+  f.number("window", c.window, "1", at_least(0), "stretches the learnt scales average over (0: the fixed model)");
+  f.number("min_scale", c.min_scale, "1", open_closed(0, 1), "lower bound of a learnt scale of the standard deviations");
+  f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound");
+  f.number("span_distance", c.span_distance, "m", greater_than(0), "a stretch ends after this much travel ...");
+  f.number("span_angle", c.span_angle, "rad", greater_than(0), "... or this much turn");
+}
+
+/// Learns the scales of an odometry motion model from pose measurements (header above).
+class MotionNoiseLearner {
+ public:
+  MotionNoiseLearner(const OdometryMotionConfig& model, const MotionNoiseLearningConfig& config);
+
+  /// The model with its standard deviations scaled by what has been learnt.
+  const OdometryMotionConfig& model() const { return scaled_; }
+
+  /// One odometry control since the last call: extends the current stretch.
+  void move(const OdometryControl& u);
+  /// A pose measured against the map (its covariance in the map frame): ends the stretch when it
+  /// is long enough, learns from it and starts the next one here. One of unknown covariance
+  /// (kUnknownVariance) ends the stretch unlearnt.
+  void measured(const SE2& pose, const Covariance3& covariance);
+  /// Forgets the current stretch (the next measurement starts one): after a relocalization.
+  void restart() { anchored_ = false; }
+  /// Whether measured() would use a measurement now (learning on, and no stretch or a long one).
+  bool wants_measurement() const {
+    return config_.window > 0.0 && (!anchored_ || travelled_ >= config_.span_distance || turned_ >= config_.span_angle);
+  }
+
+  double translation_scale() const { return translation_.scale(); }
+  double rotation_scale() const { return rotation_.scale(); }
+  std::size_t stretches() const { return translation_.observations(); }
+
+ private:
+  void start(const SE2& pose, const Covariance3& covariance);
+  void learn_odometry_noise(const Eigen::Vector3d& e, const Covariance3& measured);
+
+  OdometryMotionConfig model_;
+  OdometryMotionConfig translation_noise_;  // the model's translation noise alone
+  OdometryMotionConfig rotation_noise_;     // its rotation noise alone
+  MotionNoiseLearningConfig config_;
+  OdometryMotionConfig scaled_;
+  NoiseScaleEstimate translation_;
+  NoiseScaleEstimate rotation_;
+  bool anchored_ = false;
+  SE2 anchor_;                     // the measured pose the stretch starts at
+  Covariance3 anchor_covariance_;  // its covariance (map frame)
+  SE2 stretch_;                    // the odometry's increment since the anchor
+  Covariance3 from_translation_;   // its covariance under the unscaled model's translation noise
+  Covariance3 from_rotation_;      // ... and rotation noise
+  double travelled_ = 0.0;
+  double turned_ = 0.0;
+};
 
 }  // namespace slam2d
