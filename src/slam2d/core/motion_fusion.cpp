@@ -14,16 +14,15 @@ namespace slam2d {
 
 namespace {
 
-// b - a in (x, y, theta), the heading wrapped.
-Eigen::Vector3d difference(const SE2& a, const SE2& b) {
+bool unknown(const Covariance3& covariance) { return covariance.diagonal().maxCoeff() >= kUnknownVariance; }
+
+}  // namespace
+
+Eigen::Vector3d motion_difference(const SE2& a, const SE2& b) {
   Eigen::Vector3d d = b.vector() - a.vector();
   d.z() = angle_difference(b.theta(), a.theta());
   return d;
 }
-
-bool unknown(const Covariance3& covariance) { return covariance.diagonal().maxCoeff() >= kUnknownVariance; }
-
-}  // namespace
 
 void validate(const OdometryNoiseConfig& config) {
   check_fields(config, "OdometryNoiseConfig");
@@ -68,7 +67,7 @@ Covariance3 OdometryNoiseModel::covariance(const SE2& increment) const {
 
 void OdometryNoiseModel::observe(const SE2& increment, const SE2& measured, const Covariance3& measured_covariance) {
   if (config_.window <= 0.0 || unknown(measured_covariance)) return;
-  const Eigen::Vector3d e = difference(increment, measured);
+  const Eigen::Vector3d e = motion_difference(increment, measured);
   if (!e.allFinite()) return;
   translation_scale_.observe(0.5 * e.head<2>().squaredNorm(), std::pow(sigma_translation(increment), 2),
                              0.5 * (measured_covariance(0, 0) + measured_covariance(1, 1)));
@@ -79,7 +78,7 @@ FusedMotion fuse_motion(const MotionMeasurement& odometry, const MotionMeasureme
   // A measurement without information leaves the other as the fused one.
   if (unknown(match.covariance)) return {odometry.value, odometry.covariance, 0.0, FusionOutcome::kFused};
   if (unknown(odometry.covariance)) return {match.value, match.covariance, 0.0, FusionOutcome::kFused};
-  const Eigen::Vector3d d = difference(odometry.value, match.value);
+  const Eigen::Vector3d d = motion_difference(odometry.value, match.value);
   const Eigen::Matrix3d odometry_information = information_from_covariance(odometry.covariance);
   const Eigen::Matrix3d match_information = information_from_covariance(match.covariance);
   const double mahalanobis2 = d.dot((odometry.covariance + match.covariance).ldlt().solve(d));

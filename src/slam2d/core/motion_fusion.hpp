@@ -109,6 +109,10 @@ class OdometryNoiseModel {
   NoiseScaleEstimate rotation_scale_;
 };
 
+/// b - a in (x, y, theta), the heading's difference wrapped: how far two estimates of one small
+/// increment disagree.
+Eigen::Vector3d motion_difference(const SE2& a, const SE2& b);
+
 /// A measured increment T_a_b with its covariance (in frame a's coordinates x, y, theta).
 struct MotionMeasurement {
   SE2 value;

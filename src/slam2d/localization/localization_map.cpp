@@ -153,6 +153,14 @@ double LocalizationMap::plausibility(const std::vector<Eigen::Vector2d>& points_
   return static_cast<double>(near) / static_cast<double>(points_robot.size());
 }
 
+std::optional<MatchResult> LocalizationMap::match(const std::vector<Eigen::Vector2d>& points_robot, const SE2& guess,
+                                                   const LikelihoodFieldMatchConfig& config) const {
+  constexpr double kMinInlierFraction = 0.5;
+  MatchResult result = match_likelihood_field(field_, points_robot, guess, config);
+  if (result.inlier_fraction < kMinInlierFraction) return std::nullopt;
+  return result;
+}
+
 std::size_t LocalizationMap::memory_bytes() const {
   return sizeof(*this) + map_.cells.capacity() + field_.memory_bytes() +
          free_cells_.capacity() * sizeof(Eigen::Vector2d) + log_density_.capacity() * sizeof(std::int16_t);

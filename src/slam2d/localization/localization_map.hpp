@@ -9,12 +9,14 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/grid/likelihood_field.hpp"
+#include "slam2d/registration/likelihood_field_match.hpp"
 
 namespace slam2d {
 
@@ -44,6 +46,13 @@ class LocalizationMap {
   /// The fraction of end points within `distance` (m) of an obstacle at T_map_robot (bilinear
   /// distance): how well a pose explains a scan, 1 for a perfect fit, whatever the spread. 0 for no points.
   double plausibility(const std::vector<Eigen::Vector2d>& points_robot, const SE2& T_map_robot, double distance) const;
+
+  /// The scan's end points matched in the map from `guess` (likelihood-field least squares), or
+  /// none for a poor fit: fewer than half of the end points within the matcher's inlier distance
+  /// (a match that used up its iterations counts; the caller may ask for convergence). What follows
+  /// a robot within an odometry stall (session.hpp) and what MCL's motion noise learns from.
+  std::optional<MatchResult> match(const std::vector<Eigen::Vector2d>& points_robot, const SE2& guess,
+                                   const LikelihoodFieldMatchConfig& config = {}) const;
 
   std::size_t memory_bytes() const;
 

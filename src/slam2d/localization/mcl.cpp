@@ -452,10 +452,9 @@ LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, con
 void MonteCarloLocalization::learn_motion_noise(const ScanBeams& beams) {
   if (!motion_noise_.wants_measurement()) return;
   if (!estimate_.localized || searching_ || !place_log_likelihood_.empty()) return motion_noise_.restart();
-  const MatchResult match =
-      match_likelihood_field(map_.field(), beams.points_robot, estimate_.pose, config_.motion_noise_matcher);
-  if (match.inlier_fraction < 0.5) return motion_noise_.restart();
-  motion_noise_.measured(match.T_target_source, match.covariance);
+  const std::optional<MatchResult> match = map_.match(beams.points_robot, estimate_.pose, config_.motion_noise_matcher);
+  if (!match) return motion_noise_.restart();
+  motion_noise_.measured(match->T_target_source, match->covariance);
 }
 
 }  // namespace slam2d

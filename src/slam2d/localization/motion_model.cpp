@@ -105,10 +105,22 @@ MotionNoiseLearner::MotionNoiseLearner(const OdometryMotionConfig& model, const 
       translation_noise_(translation_noise_of(model)),
       rotation_noise_(rotation_noise_of(model)),
       config_(config),
-      scaled_(model),
       translation_(config.window, config.min_scale, config.max_scale),
       rotation_(config.window, config.min_scale, config.max_scale) {
   check_fields(config_, "MotionNoiseLearningConfig");
+}
+
+OdometryMotionConfig MotionNoiseLearner::model() const {
+  const double t = translation_.scale();
+  const double r = rotation_.scale();
+  OdometryMotionConfig scaled = model_;
+  scaled.alpha1 *= r * r;
+  scaled.alpha2 *= r * r;
+  scaled.min_rotation_sigma *= r;
+  scaled.alpha3 *= t * t;
+  scaled.alpha4 *= t * t;
+  scaled.min_translation_sigma *= t;
+  return scaled;
 }
 
 void MotionNoiseLearner::move(const OdometryControl& u) {
@@ -147,15 +159,6 @@ void MotionNoiseLearner::learn_odometry_noise(const Eigen::Vector3d& e, const Co
   if (planar(from_translation_) > kTiny) {
     translation_.observe(0.5 * e.head<2>().squaredNorm(), planar(from_translation_), planar(measured) + r2 * planar(from_rotation_));
   }
-  const double t = translation_.scale();
-  const double r = rotation_.scale();
-  scaled_ = model_;
-  scaled_.alpha1 *= r * r;
-  scaled_.alpha2 *= r * r;
-  scaled_.min_rotation_sigma *= r;
-  scaled_.alpha3 *= t * t;
-  scaled_.alpha4 *= t * t;
-  scaled_.min_translation_sigma *= t;
 }
 
 void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance) {
@@ -167,8 +170,7 @@ void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance
   // the odometry's.
   const SE2 increment = anchor_.between(pose);
   const Covariance3 measured = rotate_covariance(anchor_covariance_ + covariance, -anchor_.theta());
-  Eigen::Vector3d e = increment.vector() - stretch_.vector();
-  e.z() = angle_difference(increment.theta(), stretch_.theta());
+  const Eigen::Vector3d e = motion_difference(stretch_, increment);
   if (e.allFinite()) learn_odometry_noise(e, measured);
   start(pose, covariance);
 }

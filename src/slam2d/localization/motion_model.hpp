@@ -113,7 +113,7 @@ class MotionNoiseLearner {
   MotionNoiseLearner(const OdometryMotionConfig& model, const MotionNoiseLearningConfig& config);
 
   /// The model with its standard deviations scaled by what has been learnt.
-  const OdometryMotionConfig& model() const { return scaled_; }
+  OdometryMotionConfig model() const;
 
   /// One odometry control since the last call: extends the current stretch.
   void move(const OdometryControl& u);
@@ -140,7 +140,6 @@ class MotionNoiseLearner {
   OdometryMotionConfig translation_noise_;  // the model's translation noise alone
   OdometryMotionConfig rotation_noise_;     // its rotation noise alone
   MotionNoiseLearningConfig config_;
-  OdometryMotionConfig scaled_;
   NoiseScaleEstimate translation_;
   NoiseScaleEstimate rotation_;
   bool anchored_ = false;

@@ -4,14 +4,12 @@
 #include <ctime>
 
 #include "slam2d/localization/sensor_model.hpp"
-#include "slam2d/registration/likelihood_field_match.hpp"
 
 namespace slam2d {
 
 namespace {
 
-constexpr int kStallBeams = 180;                // beams matched within a stall
-constexpr double kStallMinInlierFraction = 0.5; // of the end points, within LikelihoodFieldMatchConfig::inlier_distance
+constexpr int kStallBeams = 180;  // beams matched within a stall
 
 }  // namespace
 
@@ -22,9 +20,8 @@ LocalizationSession::LocalizationSession(Localizer& localizer, std::optional<Kid
 // The motion from the last estimate to the scan matched in the map from there; none for a poor fit.
 SE2 LocalizationSession::stall_motion(const LaserScan& scan) const {
   const ScanBeams beams = select_beams(scan, kStallBeams, scan.range_max);
-  const MatchResult match = match_likelihood_field(map_->field(), beams.points_robot, last_.pose);
-  if (!match.converged || match.inlier_fraction < kStallMinInlierFraction) return SE2();
-  return last_.pose.between(match.T_target_source);
+  const std::optional<MatchResult> match = map_->match(beams.points_robot, last_.pose);
+  return match && match->converged ? last_.pose.between(match->T_target_source) : SE2();
 }
 
 const LocalizationEstimate& LocalizationSession::add(const SE2& T_odom_robot, const LaserScan& scan) {
