@@ -36,18 +36,29 @@ namespace {
 
 // --png: the map cropped to what is known, the run on it (lost stretches in their own colour), the
 // last estimate's 2-sigma position ellipse and, for MCL, its particles at the end.
-RgbImage run_picture(const OccupancyMap& map, const LocalizationSession& session, const LocalizationEstimate& last,
-                     const Localizer& localizer) {
+RgbImage run_picture(const OccupancyMap& map, const Trajectory& trajectory, const LocalizationSession& session,
+                     const LocalizationEstimate& last, const Localizer& localizer) {
   RenderOptions picture{.crop_margin = 20, .scale_bar = true};
-  std::vector<SE2> poses;
-  poses.reserve(session.trajectory().size());
-  for (const StampedPose& stamped : session.trajectory()) poses.push_back(stamped.pose);
   for (const bool localized : session.localized()) picture.lost.push_back(!localized);
   picture.end_covariance = last.covariance.topLeftCorner<2, 2>();
   if (const auto* mcl = dynamic_cast<const MonteCarloLocalization*>(&localizer)) {
     for (const SE2& particle : mcl->particles()) picture.points.push_back(particle.translation());
   }
-  return render_map(map, poses, picture);
+  return render_map(map, poses_of(trajectory), picture);
+}
+
+// The run's poses smoothed with the log's odometry (slam/fusion/odometry_smoothing.hpp) over each
+// stretch where the localizer was localized: a localizer's pose jitters against the map from scan
+// to scan, and the odometry is smooth from one scan to the next. The raw wheel odometry, not the
+// one the localizer saw: within a stall that one is the localizer's own match, and a kidnap is
+// not the robot's motion. The filter's own estimates (online, the Python Localizer's) stay as they are.
+Trajectory smoothed_run(const LocalizationSession& session, const std::vector<SE2>& odometry, bool enabled,
+                        OdometrySmoothingStats& stats) {
+  OdometrySmoothingConfig config;
+  config.enabled = enabled;
+  const std::vector<SE2> smoothed =
+      smooth_trusted_with_odometry(poses_of(session.trajectory()), odometry, session.localized(), config, &stats);
+  return stats.applied ? with_poses(session.trajectory(), smoothed) : session.trajectory();
 }
 
 void run_localize(const LocalizeOptions& options) {
@@ -65,6 +76,7 @@ void run_localize(const LocalizeOptions& options) {
   LogReader reader(options.log, options.input);
   Progress progress("localize", options.quiet);
   LocalizationEstimate last;
+  std::vector<SE2> odometry;
   while (auto message = reader.next()) {
     const auto* laser = std::get_if<LaserMessage>(&*message);
     if (laser == nullptr || laser->type == "RLASER") continue;
@@ -72,6 +84,7 @@ void run_localize(const LocalizeOptions& options) {
       throw ParseError(reader.path(), laser->line, laser->type + " carries no odometry pose; localization needs odometry");
     }
     last = session.add(laser->odom_pose, laser->scan);
+    odometry.push_back(laser->odom_pose);
     if (session.summary().scans % 256 == 0) {
       progress.update(reader.progress(), fmt::format("{} scans, localized: {}", session.summary().scans,
                                                      session.localized().back() ? "yes" : "no"));
@@ -83,9 +96,11 @@ void run_localize(const LocalizeOptions& options) {
   check(run.scans > 0, reader.path() + ": no front-laser scans in the log");
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  write_trajectory(options.out, session.trajectory(), trajectory_format_from_name(options.trajectory_format));
-  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, true, occupancy, session.trajectory());
-  if (!options.png.empty()) write_png(options.png, run_picture(occupancy, session, last, *localizer));
+  OdometrySmoothingStats smoothing;
+  const Trajectory trajectory = smoothed_run(session, odometry, options.odometry_smoothing, smoothing);
+  write_trajectory(options.out, trajectory, trajectory_format_from_name(options.trajectory_format));
+  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, true, occupancy, trajectory);
+  if (!options.png.empty()) write_png(options.png, run_picture(occupancy, trajectory, session, last, *localizer));
 
   const double cpu = clock.cpu_seconds();
   JsonObject summary;
@@ -103,7 +118,11 @@ void run_localize(const LocalizeOptions& options) {
     summary.add("odometry_noise_stretches", noise->stretches());
     summary.add("odometry_noise_scale_translation", noise->translation_scale());
     summary.add("odometry_noise_scale_rotation", noise->rotation_scale());
+    summary.add("odometry_calibration_translation_scale", noise->calibration().translation_scale());
+    summary.add("odometry_calibration_rotation_scale", noise->calibration().rotation_scale());
+    summary.add("odometry_calibration_drift_rad_per_m", noise->calibration().drift_per_metre());
   }
+  summary.add("odometry_smoothing", smoothing_report(smoothing));
   summary.add("converged_at_s", run.converged_at_s);
   summary.add("localized_fraction", static_cast<double>(run.localized_scans) / static_cast<double>(run.scans));
   summary.add("lost_events", run.lost_events);
@@ -149,6 +168,8 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--format", options->trajectory_format, "The trajectory as slam2d text (t x y theta) or tum (evo's format)")
       ->check(CLI::IsMember({"text", "tum"}))
       ->capture_default_str();
+  command->add_flag("!--no-odometry-smoothing", options->odometry_smoothing,
+                    "Write the localizer's own per-scan estimates, not smoothed with the odometry over its localized stretches");
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line");
   command->callback([options] { run_localize(*options); });

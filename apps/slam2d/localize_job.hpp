@@ -35,6 +35,7 @@ struct LocalizeOptions {
   std::string trajectory_format = "text";  // text | tum
   std::string mcap;                        // when set: the run for Foxglove (io/run_mcap.hpp)
   std::string png;                         // when set: the map with the run drawn on it (lost segments, end uncertainty)
+  bool odometry_smoothing = true;          // the written poses smoothed with the odometry (localize_command.cpp)
   bool json = false;
   bool quiet = false;
 };

@@ -305,13 +305,6 @@ MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed)
   return run;
 }
 
-std::vector<SE2> poses_of(const Trajectory& trajectory) {
-  std::vector<SE2> poses;
-  poses.reserve(trajectory.size());
-  for (const auto& stamped : trajectory) poses.push_back(stamped.pose);
-  return poses;
-}
-
 // map.png: the map cropped to what is known (20 cells of margin), the trajectory with its start and
 // end, a scale bar, and the reference (already in the map frame) under the trajectory.
 void write_outputs(const std::filesystem::path& dir, const MappingRun& run, const JsonObject& summary,
@@ -432,32 +425,11 @@ MappingRun run_chain(const MapJobOptions& options) {
 void smooth_run_with_odometry(MappingRun& run, const MapJobOptions& options) {
   OdometrySmoothingConfig config;
   config.enabled = options.odometry_smoothing;
-  const std::vector<SE2> method = poses_of(run.trajectory);
   OdometrySmoothingStats stats;
-  const std::vector<SE2> smoothed = smooth_with_odometry(method, run.odometry, config, &stats, &run.scan_odometry);
-  if (stats.applied) {
-    Trajectory trajectory;
-    trajectory.reserve(smoothed.size());
-    for (std::size_t i = 0; i < smoothed.size(); ++i) trajectory.push_back(run.trajectory[i].stamp, smoothed[i]);
-    run.trajectory = std::move(trajectory);
-  }
-  JsonObject report;
-  report.add("applied", stats.applied);
-  if (!stats.applied) report.add("skipped", stats.skipped);
-  if (stats.applied) {
-    const auto triple = [](const Eigen::Vector3d& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
-    report.add("method_jitter_sigma", triple(stats.noise.method_jitter));
-    report.add("odometry_jitter_sigma", triple(stats.noise.odometry_jitter));
-    report.add("odometry_translation_scale", stats.noise.translation_scale);
-    report.add("odometry_rotation_scale", stats.noise.rotation_scale);
-    report.add("streams", stats.noise.streams);
-    report.add("method_slow_sigma", triple(stats.noise.method_slow));
-    report.add("method_time_constant_scans",
-               std::vector<double>{stats.noise.method_time_constant.x(), stats.noise.method_time_constant.y()});
-    report.add("odometry_steps_refused", stats.steps_refused).add("poses_downweighted", stats.poses_downweighted);
-    report.add("max_change_m", stats.max_change_m);
-  }
-  run.method_summary.add("odometry_smoothing", report);
+  const std::vector<SE2> smoothed =
+      smooth_with_odometry(poses_of(run.trajectory), run.odometry, config, &stats, &run.scan_odometry);
+  if (stats.applied) run.trajectory = with_poses(run.trajectory, smoothed);
+  run.method_summary.add("odometry_smoothing", smoothing_report(stats));
 }
 
 MappingRun run_method(const MapJobOptions& options) {

@@ -12,6 +12,7 @@
 #include "json.hpp"
 #include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/odometry_guard.hpp"
+#include "slam2d/slam/fusion/odometry_smoothing.hpp"
 
 namespace slam2d::cli {
 
@@ -31,6 +32,26 @@ inline JsonObject fusion_report(const MotionFusionStats& stats, const OdometryNo
   report.add("fusion_odometry_won", stats.odometry_won).add("fusion_match_won", stats.match_won);
   report.add("odometry_noise_scale_translation", noise.translation_scale());
   report.add("odometry_noise_scale_rotation", noise.rotation_scale());
+  return report;
+}
+
+/// What the per-scan smoothing with the odometry found (slam/fusion/odometry_smoothing.hpp): the
+/// jitters and drift scales it estimated, the steps it refused, the largest move of a pose.
+inline JsonObject smoothing_report(const OdometrySmoothingStats& stats) {
+  JsonObject report;
+  report.add("applied", stats.applied);
+  if (!stats.applied) return report.add("skipped", stats.skipped);
+  const auto triple = [](const Eigen::Vector3d& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
+  report.add("method_jitter_sigma", triple(stats.noise.method_jitter));
+  report.add("odometry_jitter_sigma", triple(stats.noise.odometry_jitter));
+  report.add("odometry_translation_scale", stats.noise.translation_scale);
+  report.add("odometry_rotation_scale", stats.noise.rotation_scale);
+  report.add("streams", stats.noise.streams);
+  report.add("method_slow_sigma", triple(stats.noise.method_slow));
+  report.add("method_time_constant_scans",
+             std::vector<double>{stats.noise.method_time_constant.x(), stats.noise.method_time_constant.y()});
+  report.add("odometry_steps_refused", stats.steps_refused).add("poses_downweighted", stats.poses_downweighted);
+  report.add("stretches", stats.stretches).add("max_change_m", stats.max_change_m);
   return report;
 }
 

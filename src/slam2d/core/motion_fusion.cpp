@@ -43,6 +43,64 @@ void NoiseScaleEstimate::observe(double residual2_per_dof, double model_variance
   scale_ = std::sqrt(scale2);
 }
 
+OdometryCalibration::OdometryCalibration(const OdometryCalibrationConfig& config) : config_(config) {
+  check_fields(config_, "OdometryCalibrationConfig");
+}
+
+namespace {
+
+// A residual beyond 3 sigma of the fit weighs (3 sigma / residual)^2 (Huber-like): a slip or a
+// wrong match cannot drag the fit, and a real change still moves it.
+double robust_weight(double residual, double variance) {
+  const double r2 = residual * residual;
+  return r2 > 9.0 * variance ? 9.0 * variance / r2 : 1.0;
+}
+
+}  // namespace
+
+void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2d& displacement, double measured_rotation,
+                                  const Eigen::Vector2d& measured_displacement, double rotation_variance,
+                                  double translation_variance) {
+  if (config_.window <= 0.0 || !(rotation_variance > 0.0) || !(translation_variance > 0.0)) return;
+  const bool finite = std::isfinite(turn) && std::isfinite(path) && displacement.allFinite() &&
+                      std::isfinite(measured_rotation) && measured_displacement.allFinite();
+  if (!finite) return;
+  ++observations_;
+  const double keep = 1.0 - 1.0 / std::max(config_.window, 1.0);
+  const double prior = 1.0 / (config_.prior_sigma * config_.prior_sigma);
+  // Rotation: true turn = scale * odometry turn + drift * path. The residual is regressed on the
+  // measured turn, not on the odometry's: the odometry's noise is in the residual, and a regressor
+  // carrying it too would shrink the scale towards the noise (errors in variables). So
+  // measured - odometry = a * measured + b * path, with scale = 1 / (1 - a), drift = b / (1 - a).
+  const Eigen::Vector2d h(measured_rotation, path);
+  const double e = normalize_angle(measured_rotation - turn);
+  const double w = robust_weight(e - h.dot(rotation_), rotation_variance) / rotation_variance;
+  rotation_information_ = keep * rotation_information_ + w * h * h.transpose();
+  rotation_vector_ = keep * rotation_vector_ + w * e * h;
+  rotation_ = (rotation_information_ + prior * Eigen::Matrix2d::Identity()).ldlt().solve(rotation_vector_);
+  // Translation: the measured displacement along the odometry's, m = scale * the odometry's length;
+  // m - length = c * m, scale = 1 / (1 - c).
+  const double length = displacement.norm();
+  if (length < config_.min_distance) return;
+  const double along = measured_displacement.dot(displacement) / length;
+  const double wt = robust_weight(along - length - along * translation_, translation_variance) / translation_variance;
+  translation_information_ = keep * translation_information_ + wt * along * along;
+  translation_vector_ = keep * translation_vector_ + wt * (along - length) * along;
+  translation_ = translation_vector_ / (translation_information_ + prior);
+}
+
+double OdometryCalibration::translation_scale() const {
+  return std::clamp(1.0 / (1.0 - translation_), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
+}
+
+double OdometryCalibration::rotation_scale() const {
+  return std::clamp(1.0 / (1.0 - rotation_.x()), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
+}
+
+double OdometryCalibration::drift_per_metre() const {
+  return std::clamp(rotation_.y() / (1.0 - rotation_.x()), -config_.max_correction, config_.max_correction);
+}
+
 OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config)
     : config_(config),
       translation_scale_(config.window, config.min_scale, config.max_scale),

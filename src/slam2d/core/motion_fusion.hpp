@@ -83,6 +83,65 @@ class NoiseScaleEstimate {
   std::size_t observations_ = 0;
 };
 
+/// The odometry's systematic error learnt online. A wheel odometry is wrong in the same way from
+/// one metre to the next (J. Borenstein, L. Feng, "Measurement and correction of systematic
+/// odometry errors in mobile robots", IEEE T-RA 1996: unequal wheel diameters turn the robot in
+/// proportion to the distance driven, a wrong wheelbase scales its turns, a wrong wheel diameter its
+/// distance). Noise does not average that out, and a filter that weighs the odometry as if it were
+/// only noisy lags behind it (the Intel log's odometry turns 0.057 rad per metre it drives: the
+/// EKF's heading ran 0.009 rad behind the map's on average). Over stretches measured at both ends
+/// (scan matches against a map), the rotation residual (measured minus odometry) is regressed on
+/// the turn and the odometry's path length, and the along-track residual on the distance,
+/// by weighted recursive least squares forgetting over `window` stretches (each against the
+/// measured motion, not the odometry's, whose noise would bias the scales), with a ridge prior of
+/// prior_sigma at zero (an online self-calibration in the spirit of N. Roy and S. Thrun, "Online
+/// self-calibration for mobile robots", ICRA 1999, in linear form). A stretch whose residual lies
+/// beyond 3 sigma of the current fit weighs (3 sigma / residual)^2 as much (a slip, a wrong match).
+/// Corrected: distance times translation_scale, turn times rotation_scale plus
+/// drift_per_metre times the distance.
+struct OdometryCalibrationConfig {
+  double window = 100.0;        // stretches the estimate forgets over; 0: no correction
+  double prior_sigma = 0.05;    // 1 and rad/m, the ridge prior of each parameter at zero
+  double max_correction = 0.2;  // 1 and rad/m, the largest scale error and drift believed
+  double min_distance = 0.2;    // m, shorter displacements teach no translation scale
+};
+
+template <typename Fields>
+void describe(Fields& f, OdometryCalibrationConfig& c) {
+  f.number("window", c.window, "1", at_least(0), "stretches the odometry's systematic error is estimated over (0: not corrected)");
+  f.number("prior_sigma", c.prior_sigma, "1", greater_than(0), "prior standard deviation of each error (scales, and drift in rad/m) at zero");
+  f.number("max_correction", c.max_correction, "1", between(0, 0.5), "largest scale error, and drift in rad/m, believed");
+  f.number("min_distance", c.min_distance, "m", greater_than(0), "stretches that move less teach no translation scale");
+}
+
+class OdometryCalibration {
+ public:
+  explicit OdometryCalibration(const OdometryCalibrationConfig& config = {});
+
+  /// One stretch: the odometry's signed turn (rad), signed path length (m, backwards negative) and
+  /// displacement (m, in its start frame) against the measured rotation and displacement (the
+  /// same frame), with the residuals' variances besides the systematic error (the measurements'
+  /// and the odometry's noise).
+  void observe(double turn, double path, const Eigen::Vector2d& displacement, double measured_rotation,
+               const Eigen::Vector2d& measured_displacement, double rotation_variance, double translation_variance);
+
+  double translation_scale() const;  // true distance / the odometry's
+  double rotation_scale() const;     // true turn / the odometry's, less the drift
+  double drift_per_metre() const;    // rad per metre of the odometry's (signed) path
+  std::size_t observations() const { return observations_; }
+
+ private:
+  OdometryCalibrationConfig config_;
+  // Forgetting normal equations: rotation on (turn, path), translation on distance.
+  Eigen::Matrix2d rotation_information_ = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rotation_vector_ = Eigen::Vector2d::Zero();
+  double translation_information_ = 0.0;
+  double translation_vector_ = 0.0;
+  Eigen::Vector2d rotation_ = Eigen::Vector2d::Zero();  // the fit (a, b), in observe()
+  double translation_ = 0.0;                            // c
+  std::size_t observations_ = 0;
+};
+
 /// The odometry's motion noise with its online scales (translation and rotation).
 class OdometryNoiseModel {
  public:

@@ -8,6 +8,21 @@
 
 namespace slam2d {
 
+std::vector<SE2> poses_of(const Trajectory& trajectory) {
+  std::vector<SE2> poses;
+  poses.reserve(trajectory.size());
+  for (const StampedPose& stamped : trajectory) poses.push_back(stamped.pose);
+  return poses;
+}
+
+Trajectory with_poses(const Trajectory& trajectory, const std::vector<SE2>& poses) {
+  check(poses.size() == trajectory.size(), "with_poses: one pose per stamp");
+  Trajectory out;
+  out.reserve(poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) out.push_back(trajectory[i].stamp, poses[i]);
+  return out;
+}
+
 bool Trajectory::is_monotonic() const { return backwards_steps() == 0; }
 
 std::size_t Trajectory::backwards_steps() const {

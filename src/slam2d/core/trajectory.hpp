@@ -48,6 +48,11 @@ class Trajectory {
   std::vector<StampedPose> poses_;
 };
 
+/// The poses alone, in order.
+std::vector<SE2> poses_of(const Trajectory& trajectory);
+/// The trajectory's stamps with other poses, one per stamp (Error otherwise).
+Trajectory with_poses(const Trajectory& trajectory, const std::vector<SE2>& poses);
+
 /// Finds the pose nearest in time to a stamp, whatever the order of the trajectory.
 class StampIndex {
  public:

@@ -98,9 +98,10 @@ bool EkfLocalization::correct(const std::vector<Eigen::Vector2d>& points_robot) 
 LocalizationEstimate EkfLocalization::update(const SE2& T_odom_robot, const LaserScan& scan) {
   check(initialized_, "ekf: initialize() before update()");
   if (started_) {
-    const OdometryControl u = decompose_odometry(last_odom_, T_odom_robot);
-    const MotionPrediction prediction = predict_odometry_motion(pose_, covariance_, u, motion_noise_.model());
-    motion_noise_.move(u);
+    const SE2 increment = last_odom_.between(T_odom_robot);
+    const MotionPrediction prediction =
+        predict_odometry_motion(pose_, covariance_, motion_noise_.control(increment), motion_noise_.model());
+    motion_noise_.move(increment);
     pose_ = prediction.pose;
     covariance_ = prediction.covariance;
   }

@@ -39,10 +39,9 @@ bool moved_enough(const SE2& T_odom_last_update, const SE2& T_odom_robot, double
   return moved >= update_distance || turned >= update_angle;
 }
 
-LocalizationEstimate follow_odometry(const LocalizationEstimate& estimate, const SE2& T_odom_last_update,
-                                     const SE2& T_odom_robot) {
+LocalizationEstimate follow_odometry(const LocalizationEstimate& estimate, const SE2& increment) {
   LocalizationEstimate followed = estimate;
-  followed.pose = estimate.pose * T_odom_last_update.between(T_odom_robot);
+  followed.pose = estimate.pose * increment;
   return followed;
 }
 

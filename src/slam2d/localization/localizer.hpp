@@ -78,9 +78,9 @@ double sigma_xy(const Covariance3& covariance);
 /// The filters' update rule: a sensor update once the odometry moved update_distance (m) or turned
 /// update_angle (rad) since the last one.
 bool moved_enough(const SE2& T_odom_last_update, const SE2& T_odom_robot, double update_distance, double update_angle);
-/// Between sensor updates: the last estimate carried along the odometry's motion since then.
-LocalizationEstimate follow_odometry(const LocalizationEstimate& estimate, const SE2& T_odom_last_update,
-                                     const SE2& T_odom_robot);
+/// Between sensor updates: the last estimate carried along the odometry's increment since then
+/// (T_last_update_robot).
+LocalizationEstimate follow_odometry(const LocalizationEstimate& estimate, const SE2& increment);
 
 class Localizer {
  public:

@@ -321,7 +321,7 @@ LocalizationEstimate MarkovGridLocalization::update(const SE2& T_odom_robot, con
   check(initialized_, "markov: initialize() or initialize_global() before update()");
   if (started_) {
     if (!moved_enough(odom_at_update_, T_odom_robot, config_.update_distance, config_.update_angle)) {
-      return follow_odometry(estimate_, odom_at_update_, T_odom_robot);
+      return follow_odometry(estimate_, odom_at_update_.between(T_odom_robot));
     }
     motion_update(decompose_odometry(odom_at_update_, T_odom_robot));
   }

@@ -103,11 +103,12 @@ void MonteCarloLocalization::initialize_global() {
   motion_noise_.restart();
 }
 
-void MonteCarloLocalization::predict(const OdometryControl& u) {
+void MonteCarloLocalization::predict(const SE2& increment) {
+  const OdometryControl u = motion_noise_.control(increment);
   const Eigen::Vector3d sigmas = control_covariance(u, motion_noise_.model()).diagonal().cwiseSqrt();
   for (SE2& p : particles_) p = sample_odometry_motion(p, u, sigmas, rng_);
   for (SE2& p : recovery_) p = sample_odometry_motion(p, u, sigmas, rng_);
-  motion_noise_.move(u);
+  motion_noise_.move(increment);
   place_travel_ += std::abs(u.trans);
 }
 
@@ -432,9 +433,9 @@ LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, con
   }
   if (started_) {
     if (!moved_enough(odom_at_update_, T_odom_robot, config_.update_distance, config_.update_angle)) {
-      return follow_odometry(estimate_, odom_at_update_, T_odom_robot);
+      return follow_odometry(estimate_, motion_noise_.corrected(odom_at_update_.between(T_odom_robot)));
     }
-    predict(decompose_odometry(odom_at_update_, T_odom_robot));
+    predict(odom_at_update_.between(T_odom_robot));
   }
   started_ = true;
   odom_at_update_ = T_odom_robot;

@@ -213,7 +213,7 @@ class MonteCarloLocalization : public Localizer {
   const MotionNoiseLearner* motion_noise() const override { return &motion_noise_; }
 
   // The steps, for tests and benchmarks.
-  void predict(const OdometryControl& u);
+  void predict(const SE2& increment);  // the odometry's increment since the last update
   /// Weighs the particles by the scan; returns w_avg and updates w_slow, w_fast.
   double weigh(const ScanBeams& beams);
   /// The weighted mean and covariance of the particles (after weigh()).

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/localization/motion_model.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -106,8 +107,31 @@ MotionNoiseLearner::MotionNoiseLearner(const OdometryMotionConfig& model, const 
       rotation_noise_(rotation_noise_of(model)),
       config_(config),
       translation_(config.window, config.min_scale, config.max_scale),
-      rotation_(config.window, config.min_scale, config.max_scale) {
+      rotation_(config.window, config.min_scale, config.max_scale),
+      calibration_(config.calibration) {
   check_fields(config_, "MotionNoiseLearningConfig");
+}
+
+namespace {
+
+// Forwards positive: the heading drift of unequal wheels turns with the direction of travel.
+double signed_distance(const SE2& increment) {
+  const double distance = increment.translation().norm();
+  return increment.x() < 0.0 ? -distance : distance;
+}
+
+}  // namespace
+
+SE2 MotionNoiseLearner::corrected(const SE2& increment) const {
+  const double extra = (calibration_.rotation_scale() - 1.0) * increment.theta() +
+                       calibration_.drift_per_metre() * signed_distance(increment);
+  // The chord of an arc turns by half the arc's turn.
+  const Eigen::Vector2d t = Eigen::Rotation2Dd(0.5 * extra) * (calibration_.translation_scale() * increment.translation());
+  return SE2(t.x(), t.y(), increment.theta() + extra);
+}
+
+OdometryControl MotionNoiseLearner::control(const SE2& increment) const {
+  return decompose_odometry(SE2(), corrected(increment));
 }
 
 OdometryMotionConfig MotionNoiseLearner::model() const {
@@ -123,8 +147,12 @@ OdometryMotionConfig MotionNoiseLearner::model() const {
   return scaled;
 }
 
-void MotionNoiseLearner::move(const OdometryControl& u) {
-  if (!anchored_ || config_.window <= 0.0) return;
+void MotionNoiseLearner::move(const SE2& increment) {
+  if (!anchored_ || (config_.window <= 0.0 && config_.calibration.window <= 0.0)) return;
+  const OdometryControl u = control(increment);
+  raw_stretch_ = raw_stretch_ * increment;
+  raw_turn_ += increment.theta();
+  raw_path_ += signed_distance(increment);
   // The covariance propagates linearly (G P G^T + V M V^T): the two shares add up to the model's.
   from_translation_ = predict_odometry_motion(stretch_, from_translation_, u, translation_noise_).covariance;
   const MotionPrediction rotation = predict_odometry_motion(stretch_, from_rotation_, u, rotation_noise_);
@@ -138,9 +166,9 @@ void MotionNoiseLearner::start(const SE2& pose, const Covariance3& covariance) {
   anchored_ = true;
   anchor_ = pose;
   anchor_covariance_ = covariance;
-  stretch_ = SE2();
+  stretch_ = raw_stretch_ = SE2();
   from_translation_ = from_rotation_ = Covariance3::Zero();
-  travelled_ = turned_ = 0.0;
+  travelled_ = turned_ = raw_turn_ = raw_path_ = 0.0;
 }
 
 namespace {
@@ -161,6 +189,16 @@ void MotionNoiseLearner::learn_odometry_noise(const Eigen::Vector3d& e, const Co
   }
 }
 
+// The raw stretch against the measured increment, the residuals' variance the measurements' and
+// the odometry's noise at its learnt scales.
+void MotionNoiseLearner::learn_calibration(const SE2& increment, const Covariance3& measured) {
+  const double r2 = rotation_.scale() * rotation_.scale();
+  const double t2 = translation_.scale() * translation_.scale();
+  calibration_.observe(raw_turn_, raw_path_, raw_stretch_.translation(), increment.theta(), increment.translation(),
+                       measured(2, 2) + r2 * from_rotation_(2, 2),
+                       planar(measured) + t2 * planar(from_translation_) + r2 * planar(from_rotation_));
+}
+
 void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance) {
   if (!wants_measurement()) return;
   // A measurement of unknown uncertainty can neither end nor start a stretch.
@@ -171,7 +209,10 @@ void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance
   const SE2 increment = anchor_.between(pose);
   const Covariance3 measured = rotate_covariance(anchor_covariance_ + covariance, -anchor_.theta());
   const Eigen::Vector3d e = motion_difference(stretch_, increment);
-  if (e.allFinite()) learn_odometry_noise(e, measured);
+  if (e.allFinite()) {
+    learn_odometry_noise(e, measured);
+    learn_calibration(increment, measured);
+  }
   start(pose, covariance);
 }
 

@@ -90,12 +90,16 @@ MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& cov
 /// scale, counts as known when the translation's scale is learnt. A stretch rather than a step,
 /// because over one step a map match's noise hides the odometry's; over half a metre the
 /// odometry's grows above it.
+/// The same stretches teach the odometry's systematic error (OdometryCalibration,
+/// core/motion_fusion.hpp: its scales of distance and turn and its heading drift per metre): each
+/// increment is corrected for it before it predicts, and the noise scales learn what is left.
 struct MotionNoiseLearningConfig {
   double window = 100.0;  // stretches the scales average over; 0: the fixed model
   double min_scale = 0.5;
   double max_scale = 10.0;
   double span_distance = 0.5;  // m
   double span_angle = 0.5;     // rad
+  OdometryCalibrationConfig calibration{};
 };
 
 template <typename Fields>
@@ -105,6 +109,7 @@ void describe(Fields& f, MotionNoiseLearningConfig& c) {
   f.number("max_scale", c.max_scale, "1", at_least(1), "upper bound");
   f.number("span_distance", c.span_distance, "m", greater_than(0), "a stretch ends after this much travel ...");
   f.number("span_angle", c.span_angle, "rad", greater_than(0), "... or this much turn");
+  f.section("calibration", c.calibration, "the odometry's systematic error learnt from the same stretches (core/motion_fusion.hpp)");
 }
 
 /// Learns the scales of an odometry motion model from pose measurements (header above).
@@ -115,8 +120,13 @@ class MotionNoiseLearner {
   /// The model with its standard deviations scaled by what has been learnt.
   OdometryMotionConfig model() const;
 
-  /// One odometry control since the last call: extends the current stretch.
-  void move(const OdometryControl& u);
+  /// The odometry's increment (T_previous_current) corrected for its systematic error learnt so far.
+  SE2 corrected(const SE2& increment) const;
+  /// The control that predicts: the corrected increment decomposed (decompose_odometry).
+  OdometryControl control(const SE2& increment) const;
+  /// One odometry increment since the last call, as the odometry measured it: extends the current
+  /// stretch.
+  void move(const SE2& increment);
   /// A pose measured against the map (its covariance in the map frame): ends the stretch when it
   /// is long enough, learns from it and starts the next one here. One of unknown covariance
   /// (kUnknownVariance) ends the stretch unlearnt.
@@ -125,16 +135,19 @@ class MotionNoiseLearner {
   void restart() { anchored_ = false; }
   /// Whether measured() would use a measurement now (learning on, and no stretch or a long one).
   bool wants_measurement() const {
-    return config_.window > 0.0 && (!anchored_ || travelled_ >= config_.span_distance || turned_ >= config_.span_angle);
+    const bool learning = config_.window > 0.0 || config_.calibration.window > 0.0;
+    return learning && (!anchored_ || travelled_ >= config_.span_distance || turned_ >= config_.span_angle);
   }
 
   double translation_scale() const { return translation_.scale(); }
   double rotation_scale() const { return rotation_.scale(); }
   std::size_t stretches() const { return translation_.observations(); }
+  const OdometryCalibration& calibration() const { return calibration_; }
 
  private:
   void start(const SE2& pose, const Covariance3& covariance);
   void learn_odometry_noise(const Eigen::Vector3d& e, const Covariance3& measured);
+  void learn_calibration(const SE2& increment, const Covariance3& measured);
 
   OdometryMotionConfig model_;
   OdometryMotionConfig translation_noise_;  // the model's translation noise alone
@@ -142,10 +155,14 @@ class MotionNoiseLearner {
   MotionNoiseLearningConfig config_;
   NoiseScaleEstimate translation_;
   NoiseScaleEstimate rotation_;
+  OdometryCalibration calibration_;
   bool anchored_ = false;
   SE2 anchor_;                     // the measured pose the stretch starts at
   Covariance3 anchor_covariance_;  // its covariance (map frame)
-  SE2 stretch_;                    // the odometry's increment since the anchor
+  SE2 stretch_;                    // the odometry's increment since the anchor, corrected
+  SE2 raw_stretch_;                // ... as the odometry measured it
+  double raw_turn_ = 0.0;          // its signed turn, rad
+  double raw_path_ = 0.0;          // its signed path length, m (backwards negative)
   Covariance3 from_translation_;   // its covariance under the unscaled model's translation noise
   Covariance3 from_rotation_;      // ... and rotation noise
   double travelled_ = 0.0;

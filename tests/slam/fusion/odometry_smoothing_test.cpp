@@ -2,11 +2,13 @@
 // A method's per-scan poses smoothed with the odometry (slam/fusion/odometry_smoothing): against a
 // known path, the two streams' noises are recovered, a jittery method is brought below both its
 // own and the odometry's error on short relations, a sure method is left where it is, and an
-// odometry jump is cut from the chain instead of being spread over the poses.
+// odometry jump is cut from the chain instead of being spread over the poses; a localizer's run is
+// smoothed where it was localized only.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "slam2d/core/angles.hpp"
@@ -207,6 +209,38 @@ TEST(OdometrySmoothing, AThirdStreamLeavesAWhiteMethodError) {
   for (const std::size_t span : {10u, 100u}) {
     EXPECT_LT(relation_error(smoothed.three, truth, span), 1.05 * relation_error(smoothed.two, truth, span)) << span;
   }
+}
+
+// A localizer's run: smoothed over the stretches where it was localized, each on its own; where it
+// was lost (its pose no measurement) and over a stretch too short to estimate noise from, its
+// poses are left exactly as they are.
+TEST(OdometrySmoothing, OnlyTheTrustedStretchesAreSmoothed) {
+  Rng rng(19);
+  const std::vector<SE2> truth = drive();
+  std::vector<SE2> method = jittered(truth, 0.02, 0.015, rng);
+  const std::vector<SE2> odometry = odometry_of(truth, 0.02, 0.02, rng);
+  std::vector<bool> trusted(truth.size(), true);
+  for (std::size_t i = 1000; i < 1300; ++i) {  // lost: 3 m off, wandering
+    method[i] = SE2(3.0 + rng.gaussian(0, 0.5), rng.gaussian(0, 0.5), rng.gaussian(0, 0.3)) * truth[i];
+    trusted[i] = false;
+  }
+  trusted[2000] = trusted[2020] = false;  // a 19-scan stretch between
+  OdometrySmoothingStats stats;
+  const std::vector<SE2> smoothed = smooth_trusted_with_odometry(method, odometry, trusted, {}, &stats);
+  ASSERT_TRUE(stats.applied);
+  EXPECT_EQ(stats.stretches, 3u);  // 0-999, 1300-1999, 2021-: the 19 scans between 2001 and 2020 are too few
+  for (std::size_t i = 1000; i < 1300; ++i) EXPECT_EQ(smoothed[i], method[i]) << i;
+  for (std::size_t i = 2000; i < 2021; ++i) EXPECT_EQ(smoothed[i], method[i]) << i;
+  const auto part = [](const std::vector<SE2>& poses, std::size_t begin, std::size_t end) {
+    return std::vector<SE2>(poses.begin() + static_cast<std::ptrdiff_t>(begin), poses.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, 1000}, {1300, 2000}, {2021, truth.size()}}) {
+    const double m = relation_error(part(method, begin, end), part(truth, begin, end), 10);
+    const double s = relation_error(part(smoothed, begin, end), part(truth, begin, end), 10);
+    EXPECT_LT(s, 0.6 * m) << begin << "-" << end << ": method " << m << " smoothed " << s;
+  }
+  EXPECT_EQ(smooth_trusted_with_odometry(method, odometry, std::vector<bool>(truth.size(), false), {}, &stats), method);
+  EXPECT_FALSE(stats.applied);
 }
 
 TEST(OdometrySmoothing, LeavesThePosesWhenItCannotOrMayNot) {

@@ -499,22 +499,26 @@ PoseStreamNoise estimate_pose_stream_noise(const std::vector<SE2>& method, const
   return estimate_noise(method, odometry, model_variances(odometry, config.odometry_noise), config, scan_odometry);
 }
 
+namespace {
+
+// What both entry points check first; false (with `out.skipped` saying why) leaves the poses.
+bool may_smooth(const OdometrySmoothingConfig& config, bool sizes_agree, std::size_t poses, OdometrySmoothingStats& out) {
+  validate(config);
+  out = {};
+  out.poses = poses;
+  if (!config.enabled) out.skipped = "disabled";
+  else if (!sizes_agree) out.skipped = "the method gave a pose to a different number of scans than the odometry";
+  return out.skipped.empty();
+}
+
+}  // namespace
+
 std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
                                       const OdometrySmoothingConfig& config, OdometrySmoothingStats* stats,
                                       const std::vector<SE2>* scan_odometry) {
-  validate(config);
   OdometrySmoothingStats local;
   OdometrySmoothingStats& out = stats != nullptr ? *stats : local;
-  out = {};
-  out.poses = method.size();
-  if (!config.enabled) {
-    out.skipped = "disabled";
-    return method;
-  }
-  if (method.size() != odometry.size()) {
-    out.skipped = "the method gave a pose to a different number of scans than the odometry";
-    return method;
-  }
+  if (!may_smooth(config, method.size() == odometry.size(), method.size(), out)) return method;
   if (method.size() < config.min_poses) {
     out.skipped = "fewer poses than min_poses";
     return method;
@@ -562,6 +566,47 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
     poses.push_back(pose);
   }
   out.applied = true;
+  out.stretches = 1;
+  return poses;
+}
+
+std::vector<SE2> smooth_trusted_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                              const std::vector<bool>& trusted, const OdometrySmoothingConfig& config,
+                                              OdometrySmoothingStats* stats) {
+  OdometrySmoothingStats local;
+  OdometrySmoothingStats& out = stats != nullptr ? *stats : local;
+  const bool sizes_agree = method.size() == odometry.size() && method.size() == trusted.size();
+  if (!may_smooth(config, sizes_agree, method.size(), out)) return method;
+  std::vector<SE2> poses = method;
+  std::size_t longest = 0;
+  for (std::size_t begin = 0; begin < method.size();) {
+    if (!trusted[begin]) {
+      ++begin;
+      continue;
+    }
+    std::size_t end = begin;
+    while (end < method.size() && trusted[end]) ++end;
+    const auto first = static_cast<std::ptrdiff_t>(begin);
+    const auto last = static_cast<std::ptrdiff_t>(end);
+    OdometrySmoothingStats stretch;
+    const std::vector<SE2> smoothed =
+        smooth_with_odometry({method.begin() + first, method.begin() + last},
+                             {odometry.begin() + first, odometry.begin() + last}, config, &stretch);
+    if (stretch.applied) {
+      std::copy(smoothed.begin(), smoothed.end(), poses.begin() + first);
+      ++out.stretches;
+      out.steps_refused += stretch.steps_refused;
+      out.poses_downweighted += stretch.poses_downweighted;
+      out.max_change_m = std::max(out.max_change_m, stretch.max_change_m);
+      if (end - begin > longest) {
+        longest = end - begin;
+        out.noise = stretch.noise;
+      }
+    }
+    begin = end;
+  }
+  out.applied = out.stretches > 0;
+  if (!out.applied) out.skipped = "no trusted stretch of min_poses poses";
   return poses;
 }
 

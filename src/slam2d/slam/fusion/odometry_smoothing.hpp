@@ -66,6 +66,9 @@
 // Where the method is sure and the odometry noisy, R is near 0 and the poses stay the method's;
 // where the laser is noisy and the odometry good, the poses follow the odometry between scans and
 // the method over longer spans. The map stays the method's (it was built from its own poses).
+//
+// A localizer's run is smoothed the same way over each stretch where it was localized
+// (smooth_trusted_with_odometry; `slam2d localize`).
 
 #include <cstddef>
 #include <string>
@@ -130,6 +133,7 @@ struct OdometrySmoothingStats {
   std::size_t steps_refused = 0;      // odometry increments cut from the chain
   std::size_t poses_downweighted = 0; // method poses whose weight the update reduced
   double max_change_m = 0.0;          // the largest move of a pose
+  std::size_t stretches = 0;          // stretches smoothed (1 for a whole run)
 };
 
 /// The noise of the streams, as estimated above. `method` and `odometry` have one pose per scan,
@@ -146,5 +150,14 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
                                       const OdometrySmoothingConfig& config = {},
                                       OdometrySmoothingStats* stats = nullptr,
                                       const std::vector<SE2>* scan_odometry = nullptr);
+
+/// The same over the stretches where `trusted` holds (a localizer's localized steps): each stretch
+/// of at least min_poses is smoothed on its own, with its own noise; the poses outside (a filter
+/// lost, or still converging, whose pose is no measurement) are left as they are. `stats` sums the
+/// stretches (`noise` is the longest smoothed stretch's); `stretches` counts those smoothed.
+std::vector<SE2> smooth_trusted_with_odometry(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
+                                              const std::vector<bool>& trusted,
+                                              const OdometrySmoothingConfig& config = {},
+                                              OdometrySmoothingStats* stats = nullptr);
 
 }  // namespace slam2d
