@@ -157,8 +157,8 @@ TEST(MotionNoiseLearner, AWindowOfZeroKeepsTheModel) {
 TEST(MotionNoiseLearner, CorrectsTheOdometrysSystematicError) {
   const OdometryMotionConfig model;
   Rng rng(29);
-  MotionNoiseLearner learner(model, MotionNoiseLearningConfig{});
-  MotionNoiseLearner fixed(model, MotionNoiseLearningConfig{.calibration = {.window = 0.0}});
+  MotionNoiseLearner learner(model, MotionNoiseLearningConfig{.calibration = {.window = 100.0}});
+  MotionNoiseLearner fixed(model, MotionNoiseLearningConfig{});  // the default: no calibration
   SE2 truth;
   SE2 odometry;
   double worst = 0.0;

@@ -290,8 +290,10 @@ TEST(LocalizationRealData, EkfFindsTheOdometrysSystematicErrorAndInjectedOnes) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const LocalizationMap& map = intel_map(data);
   const std::filesystem::path log = data / "intel" / "intel.clf.gz";
+  EkfConfig config;
+  config.motion_noise.calibration.window = 100.0;  // an option (off by default)
   const auto learn = [&](const std::vector<SensorMessage>& messages) {
-    EkfLocalization ekf(map);
+    EkfLocalization ekf(map, config);
     ekf.initialize(SE2(-0.0718, -0.1626, 0.2200), covariance_from_sigmas(0.3, 0.3, 0.2));
     LocalizationSession session(ekf);
     for (const SensorMessage& message : messages) {

@@ -90,16 +90,18 @@ MotionPrediction predict_odometry_motion(const SE2& pose, const Covariance3& cov
 /// scale, counts as known when the translation's scale is learnt. A stretch rather than a step,
 /// because over one step a map match's noise hides the odometry's; over half a metre the
 /// odometry's grows above it.
-/// The same stretches teach the odometry's systematic error (OdometryCalibration,
+/// The same stretches can teach the odometry's systematic error (OdometryCalibration,
 /// core/motion_fusion.hpp: its scales of distance and turn and its heading drift per metre): each
-/// increment is corrected for it before it predicts, and the noise scales learn what is left.
+/// increment is then corrected for it before it predicts, and the noise scales learn what is left.
+/// An option, off: it finds the error (Intel's drift, injected faults), but MCL on FR079 under
+/// several laser and odometry faults lost accuracy with it (docs/fusion_by_uncertainty.md).
 struct MotionNoiseLearningConfig {
   double window = 100.0;  // stretches the scales average over; 0: the fixed model
   double min_scale = 0.5;
   double max_scale = 10.0;
   double span_distance = 0.5;  // m
   double span_angle = 0.5;     // rad
-  OdometryCalibrationConfig calibration{};
+  OdometryCalibrationConfig calibration{.window = 0.0};  // off (docs/fusion_by_uncertainty.md)
 };
 
 template <typename Fields>
