@@ -12,9 +12,9 @@
 // set"), without handing the filter to the look-alike wing, and a global start converges at the
 // right wing. In the largest building, Acapulco (the corrected log, ~4400 m^2 of free space),
 // global MCL converges to the log's own poses. With odometry four times noisier than the
-// localization benchmark's 1x, the EKF and MCL learn its noise and stay with the robot; the EKF
-// finds the odometry's systematic error, Intel's own and faults injected on top. Bounds sit a
-// little above what was measured.
+// localization benchmark's 1x, the EKF and MCL learn its noise and stay with the robot (the Markov
+// grid at eight times); the EKF finds the odometry's systematic error, Intel's own and faults
+// injected on top. Bounds sit a little above what was measured.
 
 #include <gtest/gtest.h>
 
@@ -23,6 +23,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -34,6 +35,7 @@
 #include "slam2d/io/map_io.hpp"
 #include "slam2d/io/relations.hpp"
 #include "slam2d/localization/ekf.hpp"
+#include "slam2d/localization/markov_grid.hpp"
 #include "slam2d/localization/mcl.hpp"
 #include "slam2d/localization/session.hpp"
 #include "slam2d/sim/fault_injection.hpp"
@@ -79,11 +81,48 @@ const LocalizationMap& intel_map(const std::filesystem::path& data) {
   return map;
 }
 
+// Every front-laser scan of `messages` through a session of the localizer.
+Trajectory localize_all(Localizer& localizer, const std::vector<SensorMessage>& messages) {
+  LocalizationSession session(localizer);
+  for (const SensorMessage& message : messages) {
+    const auto* laser = std::get_if<LaserMessage>(&message);
+    if (laser != nullptr && laser->type != "RLASER") session.add(laser->odom_pose, laser->scan);
+  }
+  return session.trajectory();
+}
+
+const SE2 kIntelStart(-0.0718, -0.1626, 0.2200);  // the raw log's first scan in intel_map's frame
+
+// The EKF on the clean Intel log from the known start: 0.037 m from the relations, the reference
+// the noisy-odometry runs are scored against, as the localization benchmark scores them.
+const Trajectory& intel_ekf_reference(const std::filesystem::path& data) {
+  static const Trajectory reference = [&] {
+    EkfLocalization ekf(intel_map(data));
+    ekf.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
+    return localize_all(ekf, test::read_log(data / "intel" / "intel.clf.gz"));
+  }();
+  return reference;
+}
+
+// The mean distance to the reference scan by scan (m) and the share of scans more than 1 m from it.
+std::pair<double, double> distance_to(const Trajectory& reference, const Trajectory& trajectory) {
+  EXPECT_EQ(trajectory.size(), reference.size());
+  const std::size_t n = std::min(trajectory.size(), reference.size());
+  double sum = 0.0;
+  std::size_t lost = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double error = (trajectory[i].pose.translation() - reference[i].pose.translation()).norm();
+    sum += error;
+    lost += error > 1.0 ? 1 : 0;
+  }
+  return {sum / static_cast<double>(n), static_cast<double>(lost) / static_cast<double>(n)};
+}
+
 TEST(LocalizationRealData, EkfTracksIntelFromAKnownStart) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const LocalizationMap& map = intel_map(data);
   EkfLocalization ekf(map);
-  ekf.initialize(SE2(-0.0718, -0.1626, 0.2200), covariance_from_sigmas(0.3, 0.3, 0.2));
+  ekf.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
   LocalizationSession session(ekf);
   localize(session, (data / "intel" / "intel.clf.gz").string(), 5000);
   const Trajectory& trajectory = session.trajectory();
@@ -116,7 +155,7 @@ std::pair<std::size_t, std::size_t> wrong_localized(const LocalizationSession& s
 // MCL over the first `scans` scans of Intel from the raw log's known first pose in the map.
 Trajectory intel_from_known_start(const LocalizationMap& map, const std::string& log, std::size_t scans) {
   MonteCarloLocalization tracker(map, MclConfig{.seed = 1});
-  tracker.initialize(SE2(-0.0718, -0.1626, 0.2200), covariance_from_sigmas(0.3, 0.3, 0.2));
+  tracker.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
   LocalizationSession session(tracker);
   return localize(session, log, scans).trajectory();
 }
@@ -202,15 +241,14 @@ TEST(LocalizationRealData, EkfAndMclFollowTheRobotThroughOdometryStalls) {
     EXPECT_GE(session.odometry_stats().stalls, 30u);
     return relation_error(session.trajectory(), relations).translation.mean;
   };
-  const SE2 start(-0.0718, -0.1626, 0.2200);
   EkfLocalization ekf(map);
-  ekf.initialize(start, covariance_from_sigmas(0.3, 0.3, 0.2));
+  ekf.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
   EXPECT_LT(run(ekf, &map), 0.05);  // measured 0.0368 m (clean 0.0370)
   EkfLocalization blind(map);
-  blind.initialize(start, covariance_from_sigmas(0.3, 0.3, 0.2));
+  blind.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
   EXPECT_GT(run(blind, nullptr), 1.0);  // measured 6.27 m: lost at the first stall in a turn
   MonteCarloLocalization mcl(map, MclConfig{.seed = 1});
-  mcl.initialize(start, covariance_from_sigmas(0.3, 0.3, 0.2));
+  mcl.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
   EXPECT_LT(run(mcl, &map), 0.06);  // measured 0.0456 m (clean 0.0461; 0.0721 m without the map)
 }
 
@@ -223,52 +261,28 @@ TEST(LocalizationRealData, EkfAndMclLearnAnOdometryFourTimesNoisierThanTheirMode
   SLAM2D_REQUIRE_REAL_DATA(data);
   const LocalizationMap& map = intel_map(data);
   const std::filesystem::path log = data / "intel" / "intel.clf.gz";
-  const auto run = [&](Localizer& localizer, const std::vector<SensorMessage>& messages) {
-    LocalizationSession session(localizer);
-    for (const SensorMessage& message : messages) {
-      const auto* laser = std::get_if<LaserMessage>(&message);
-      if (laser != nullptr && laser->type != "RLASER") session.add(laser->odom_pose, laser->scan);
-    }
-    return session.trajectory();
-  };
-  const SE2 start(-0.0718, -0.1626, 0.2200);
   const Covariance3 prior = covariance_from_sigmas(0.3, 0.3, 0.2);
-  EkfLocalization clean(map);
-  clean.initialize(start, prior);
-  const Trajectory reference = run(clean, test::read_log(log));
+  const Trajectory& reference = intel_ekf_reference(data);
   const std::vector<SensorMessage> noisy =
       test::read_log_with_fault(log, "odom-noise:translation=0.4,heading=0.16,rotation=0.4");
-  // Mean distance to the reference (m) and the share of scans more than 1 m from it.
-  const auto score = [&](Localizer& localizer) {
-    const Trajectory trajectory = run(localizer, noisy);
-    EXPECT_EQ(trajectory.size(), reference.size());
-    const std::size_t n = std::min(trajectory.size(), reference.size());
-    double sum = 0.0;
-    std::size_t lost = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double error = (trajectory[i].pose.translation() - reference[i].pose.translation()).norm();
-      sum += error;
-      lost += error > 1.0 ? 1 : 0;
-    }
-    return std::pair{sum / static_cast<double>(n), static_cast<double>(lost) / static_cast<double>(n)};
-  };
+  const auto score = [&](Localizer& localizer) { return distance_to(reference, localize_all(localizer, noisy)); };
   EkfLocalization ekf(map);
-  ekf.initialize(start, prior);
+  ekf.initialize(kIntelStart, prior);
   const auto [ekf_error, ekf_lost] = score(ekf);
   EkfConfig fixed_ekf_config;
   fixed_ekf_config.motion_noise.window = 0.0;
   fixed_ekf_config.motion_noise.calibration.window = 0.0;
   EkfLocalization fixed_ekf(map, fixed_ekf_config);
-  fixed_ekf.initialize(start, prior);
+  fixed_ekf.initialize(kIntelStart, prior);
   const auto [fixed_ekf_error, fixed_ekf_lost] = score(fixed_ekf);
   MonteCarloLocalization mcl(map, MclConfig{.seed = 1});
-  mcl.initialize(start, prior);
+  mcl.initialize(kIntelStart, prior);
   const auto [mcl_error, mcl_lost] = score(mcl);
   MclConfig fixed_mcl_config{.seed = 1};
   fixed_mcl_config.motion_noise.window = 0.0;
   fixed_mcl_config.motion_noise.calibration.window = 0.0;
   MonteCarloLocalization fixed_mcl(map, fixed_mcl_config);
-  fixed_mcl.initialize(start, prior);
+  fixed_mcl.initialize(kIntelStart, prior);
   const auto [fixed_mcl_error, fixed_mcl_lost] = score(fixed_mcl);
   // Measured: the EKF 0.175 m (2.4 % lost) against 0.584 m (3.7 %), translation scale 5.3; MCL
   // 0.075 m (none lost) against 0.709 m (7.1 %), scale 3.6.
@@ -283,6 +297,35 @@ TEST(LocalizationRealData, EkfAndMclLearnAnOdometryFourTimesNoisierThanTheirMode
   EXPECT_GT(fixed_mcl_lost, 0.03);
 }
 
+// The Markov grid with odometry eight times noisier than the localization benchmark's 1x: its
+// motion convolution then covers the learnt noise (motion_noise, the default) instead of its
+// model's. Scored as the test above. The localization benchmark's runs (seeds 1-2) gave, learnt
+// against fixed: Intel 0.096-0.097 m against 0.156-0.172 m, ACES 0.124-0.138 m against 0.219-1.88
+// m, FR079 0.093-0.237 m against 0.382-0.622 m.
+TEST(LocalizationRealData, MarkovGridLearnsAnOdometryEightTimesNoisierThanItsModel) {
+  SLAM2D_REQUIRE_REAL_DATA(data);
+  const LocalizationMap& map = intel_map(data);
+  const Trajectory& reference = intel_ekf_reference(data);
+  const std::vector<SensorMessage> noisy =
+      test::read_log_with_fault(data / "intel" / "intel.clf.gz", "odom-noise:translation=0.8,heading=0.32,rotation=0.8");
+  const auto score = [&](const MarkovGridConfig& config) {
+    MarkovGridLocalization markov(map, config);
+    markov.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
+    const auto [error, lost] = distance_to(reference, localize_all(markov, noisy));
+    return std::tuple{error, lost, markov.motion_noise()->translation_scale()};
+  };
+  const auto [error, lost, scale] = score({});
+  MarkovGridConfig fixed_config;
+  fixed_config.motion_noise.window = 0.0;
+  const auto [fixed_error, fixed_lost, fixed_scale] = score(fixed_config);
+  // Measured: 0.111 m (none lost), translation scale 3.8, against 0.174 m (0.6 % lost).
+  EXPECT_GT(scale, 2.0);
+  EXPECT_EQ(fixed_scale, 1.0);
+  EXPECT_LT(error, 0.13);
+  EXPECT_LT(error, 0.75 * fixed_error);
+  EXPECT_LE(lost, fixed_lost);
+}
+
 // The odometry's systematic error, learnt by the EKF from its matches against the map: Intel's own
 // (it turns 0.057 rad per metre it drives and reads 3.3 % long: a regression of its increments on
 // graph SLAM's, over 20 scans), and the faults injected on top of it, found by the difference.
@@ -294,7 +337,7 @@ TEST(LocalizationRealData, EkfFindsTheOdometrysSystematicErrorAndInjectedOnes) {
   config.motion_noise.calibration.window = 100.0;  // an option (off by default)
   const auto learn = [&](const std::vector<SensorMessage>& messages) {
     EkfLocalization ekf(map, config);
-    ekf.initialize(SE2(-0.0718, -0.1626, 0.2200), covariance_from_sigmas(0.3, 0.3, 0.2));
+    ekf.initialize(kIntelStart, covariance_from_sigmas(0.3, 0.3, 0.2));
     LocalizationSession session(ekf);
     for (const SensorMessage& message : messages) {
       const auto* laser = std::get_if<LaserMessage>(&message);

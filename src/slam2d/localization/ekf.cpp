@@ -99,9 +99,7 @@ LocalizationEstimate EkfLocalization::update(const SE2& T_odom_robot, const Lase
   check(initialized_, "ekf: initialize() before update()");
   if (started_) {
     const SE2 increment = last_odom_.between(T_odom_robot);
-    const MotionPrediction prediction =
-        predict_odometry_motion(pose_, covariance_, motion_noise_.control(increment), motion_noise_.model());
-    motion_noise_.move(increment);
+    const MotionPrediction prediction = predict_odometry_motion(pose_, covariance_, motion_noise_.move(increment), motion_noise_.model());
     pose_ = prediction.pose;
     covariance_ = prediction.covariance;
   }

@@ -18,7 +18,8 @@ MarkovGridLocalization::MarkovGridLocalization(const LocalizationMap& map, const
     : map_(map),
       config_(config),
       sensor_map_((validate(config), map.map()), with_sigma_hit(map.field().config(), config.sigma_hit)),
-      status_(config.status) {
+      status_(config.status),
+      motion_noise_(config.motion, config.motion_noise) {
   const OccupancyMap& m = map_.map();
   T_map_grid_ = m.origin;
   width_ = std::max(1, static_cast<int>(std::ceil(m.width * m.resolution / config_.resolution)));
@@ -51,6 +52,7 @@ void MarkovGridLocalization::initialize_global() {
   initialized_ = true;
   started_ = false;
   status_.reset();
+  motion_noise_.restart();
 }
 
 void MarkovGridLocalization::initialize(const SE2& T_map_robot, const Covariance3& covariance) {
@@ -77,6 +79,7 @@ void MarkovGridLocalization::initialize(const SE2& T_map_robot, const Covariance
   initialized_ = true;
   started_ = false;
   status_.reset();
+  motion_noise_.restart();
 }
 
 void MarkovGridLocalization::motion_update(const OdometryControl& u) {
@@ -120,7 +123,7 @@ void MarkovGridLocalization::motion_update(const OdometryControl& u) {
   }
   belief_.swap(scratch_);
   // Binomial passes (variance 1/2 cell^2 each) that cover the motion model's noise for u.
-  const Eigen::Matrix3d noise = control_covariance(u, config_.motion);  // rot1, trans, rot2
+  const Eigen::Matrix3d noise = control_covariance(u, motion_noise_.model());  // rot1, trans, rot2
   const double variance_xy = std::max(noise(1, 1), u.trans * u.trans * noise(0, 0));
   const double variance_theta = noise(0, 0) + noise(2, 2);
   const auto passes = [](double variance, double step) {
@@ -321,9 +324,9 @@ LocalizationEstimate MarkovGridLocalization::update(const SE2& T_odom_robot, con
   check(initialized_, "markov: initialize() or initialize_global() before update()");
   if (started_) {
     if (!moved_enough(odom_at_update_, T_odom_robot, config_.update_distance, config_.update_angle)) {
-      return follow_odometry(estimate_, odom_at_update_.between(T_odom_robot));
+      return follow_odometry(estimate_, motion_noise_.corrected(odom_at_update_.between(T_odom_robot)));
     }
-    motion_update(decompose_odometry(odom_at_update_, T_odom_robot));
+    motion_update(motion_noise_.move(odom_at_update_.between(T_odom_robot)));
   }
   started_ = true;
   odom_at_update_ = T_odom_robot;
@@ -331,6 +334,10 @@ LocalizationEstimate MarkovGridLocalization::update(const SE2& T_odom_robot, con
   sensor_update(beams.points_robot);
   if (!(belief_[argmax()] > 0.0f)) initialize_global();
   estimate_ = summarize(beams.points_robot);
+  // The learner's measurement, made only where a stretch ends and only while localized.
+  if (motion_noise_.wants_measurement()) {
+    motion_noise_.measured(estimate_.localized ? map_.match(beams.points_robot, estimate_.pose, config_.motion_noise_matcher) : std::nullopt);
+  }
   return estimate_;
 }
 

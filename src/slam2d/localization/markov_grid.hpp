@@ -14,7 +14,8 @@
 //   kernel along x and y and m_theta passes along theta, each pass adding a variance of 1/2 cell^2
 //   (1/2 layer^2), as many as cover the odometry motion model's noise for this control
 //   (motion_model.hpp: the translation variance and trans^2 var(rot1) across, var(rot1) +
-//   var(rot2) in heading), at least one (the grid's own quantisation).
+//   var(rot2) in heading), at least one (the grid's own quantisation). The model's noise is
+//   scaled by what scan matches against the map show of the odometry (motion_noise, as MCL's).
 // - Sensor: Bayes' rule with the likelihood field over max_beams beams (its own sigma_hit, wider
 //   than the particle filter's, since a pose is known only to a cell), then normalisation. Cells
 //   below prune_threshold of the maximum are set to zero; once localized the threshold rises to
@@ -48,6 +49,10 @@ struct MarkovGridConfig {
   double selective_threshold = 1e-5;
   double estimate_radius = 1.0;
   OdometryMotionConfig motion{};
+  // The odometry's noise learnt from scan matches against the map at the estimate while localized,
+  // as MCL's (MotionNoiseLearner, motion_model.hpp): it only widens the motion convolution.
+  MotionNoiseLearningConfig motion_noise{.min_scale = 1.0};
+  LikelihoodFieldMatchConfig motion_noise_matcher{};
   LocalizationStatusConfig status{};
 };
 
@@ -65,6 +70,8 @@ void describe(Fields& f, MarkovGridConfig& c) {
            "of the maximum: once localized, only cells above are updated");
   f.number("estimate_radius", c.estimate_radius, "m", greater_than(0), "mass around the mode that makes the estimate");
   f.section("motion", c.motion, "the noise the motion convolution covers");
+  f.section("motion_noise", c.motion_noise, "the motion noise's scales learnt from scan matches while localized");
+  f.section("motion_noise_matcher", c.motion_noise_matcher, "the scan match at the estimate that motion_noise learns from");
   f.section("status", c.status, "when the estimate counts as localized or lost");
 }
 
@@ -84,6 +91,7 @@ class MarkovGridLocalization : public Localizer {
   LocalizationEstimate update(const SE2& T_odom_robot, const LaserScan& scan) override;
   std::size_t sensor_updates() const override { return sensor_updates_; }
   std::string name() const override { return "markov"; }
+  const MotionNoiseLearner* motion_noise() const override { return &motion_noise_; }
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -127,6 +135,7 @@ class MarkovGridLocalization : public Localizer {
   SE2 odom_at_update_;
   LocalizationEstimate estimate_;
   LocalizationStatus status_;
+  MotionNoiseLearner motion_noise_;
   std::size_t sensor_updates_ = 0;
   std::size_t evaluated_last_ = 0;
 };

@@ -104,11 +104,10 @@ void MonteCarloLocalization::initialize_global() {
 }
 
 void MonteCarloLocalization::predict(const SE2& increment) {
-  const OdometryControl u = motion_noise_.control(increment);
+  const OdometryControl u = motion_noise_.move(increment);
   const Eigen::Vector3d sigmas = control_covariance(u, motion_noise_.model()).diagonal().cwiseSqrt();
   for (SE2& p : particles_) p = sample_odometry_motion(p, u, sigmas, rng_);
   for (SE2& p : recovery_) p = sample_odometry_motion(p, u, sigmas, rng_);
-  motion_noise_.move(increment);
   place_travel_ += std::abs(u.trans);
 }
 
@@ -442,20 +441,14 @@ LocalizationEstimate MonteCarloLocalization::update(const SE2& T_odom_robot, con
   const ScanBeams beams = select_beams(scan, config_.max_beams, config_.usable_range);
   weigh(beams);
   estimate_ = summarize(beams);
-  learn_motion_noise(beams);
+  // The learner's measurement, made only where a stretch ends and only while localized on one
+  // place (a match at the mean of two places, or of a lost set, is no measurement).
+  if (motion_noise_.wants_measurement()) {
+    const bool one_place = estimate_.localized && !searching_ && place_log_likelihood_.empty();
+    motion_noise_.measured(one_place ? map_.match(beams.points_robot, estimate_.pose, config_.motion_noise_matcher) : std::nullopt);
+  }
   resample();
   return estimate_;
-}
-
-// The scan matched against the map at the estimate, where the learner wants a measurement: only
-// while localized on one place (a match at the mean of two places, or of a lost set, is no
-// measurement), and only a match that explains the scan.
-void MonteCarloLocalization::learn_motion_noise(const ScanBeams& beams) {
-  if (!motion_noise_.wants_measurement()) return;
-  if (!estimate_.localized || searching_ || !place_log_likelihood_.empty()) return motion_noise_.restart();
-  const std::optional<MatchResult> match = map_.match(beams.points_robot, estimate_.pose, config_.motion_noise_matcher);
-  if (!match) return motion_noise_.restart();
-  motion_noise_.measured(match->T_target_source, match->covariance);
 }
 
 }  // namespace slam2d

@@ -234,8 +234,6 @@ class MonteCarloLocalization : public Localizer {
   const MclConfig& config() const { return config_; }
 
  private:
-  void learn_motion_noise(const ScanBeams& beams);
-
   const LocalizationMap& map_;
   MclConfig config_;
   MotionNoiseLearner motion_noise_;

@@ -130,10 +130,6 @@ SE2 MotionNoiseLearner::corrected(const SE2& increment) const {
   return SE2(t.x(), t.y(), increment.theta() + extra);
 }
 
-OdometryControl MotionNoiseLearner::control(const SE2& increment) const {
-  return decompose_odometry(SE2(), corrected(increment));
-}
-
 OdometryMotionConfig MotionNoiseLearner::model() const {
   const double t = translation_.scale();
   const double r = rotation_.scale();
@@ -147,9 +143,9 @@ OdometryMotionConfig MotionNoiseLearner::model() const {
   return scaled;
 }
 
-void MotionNoiseLearner::move(const SE2& increment) {
-  if (!anchored_ || (config_.window <= 0.0 && config_.calibration.window <= 0.0)) return;
-  const OdometryControl u = control(increment);
+OdometryControl MotionNoiseLearner::move(const SE2& increment) {
+  const OdometryControl u = decompose_odometry(SE2(), corrected(increment));
+  if (!anchored_ || (config_.window <= 0.0 && config_.calibration.window <= 0.0)) return u;
   raw_stretch_ = raw_stretch_ * increment;
   raw_turn_ += increment.theta();
   raw_path_ += signed_distance(increment);
@@ -160,6 +156,7 @@ void MotionNoiseLearner::move(const SE2& increment) {
   stretch_ = rotation.pose;
   travelled_ += std::abs(u.trans);
   turned_ += std::abs(u.rot1) + std::abs(u.rot2);
+  return u;
 }
 
 void MotionNoiseLearner::start(const SE2& pose, const Covariance3& covariance) {
@@ -214,6 +211,12 @@ void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance
     learn_calibration(increment, measured);
   }
   start(pose, covariance);
+}
+
+void MotionNoiseLearner::measured(const std::optional<MatchResult>& match) {
+  if (!wants_measurement()) return;
+  if (!match) return restart();
+  measured(match->T_target_source, match->covariance);
 }
 
 }  // namespace slam2d

@@ -17,12 +17,14 @@
 // the covariance of a standing robot invertible.
 
 #include <Eigen/Core>
+#include <optional>
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/core/se2.hpp"
+#include "slam2d/registration/match_result.hpp"
 
 namespace slam2d {
 
@@ -124,15 +126,17 @@ class MotionNoiseLearner {
 
   /// The odometry's increment (T_previous_current) corrected for its systematic error learnt so far.
   SE2 corrected(const SE2& increment) const;
-  /// The control that predicts: the corrected increment decomposed (decompose_odometry).
-  OdometryControl control(const SE2& increment) const;
   /// One odometry increment since the last call, as the odometry measured it: extends the current
-  /// stretch.
-  void move(const SE2& increment);
+  /// stretch and returns the control that predicts it (the corrected increment decomposed,
+  /// decompose_odometry).
+  OdometryControl move(const SE2& increment);
   /// A pose measured against the map (its covariance in the map frame): ends the stretch when it
   /// is long enough, learns from it and starts the next one here. One of unknown covariance
   /// (kUnknownVariance) ends the stretch unlearnt.
   void measured(const SE2& pose, const Covariance3& covariance);
+  /// The scan matched against the map at a localized estimate (LocalizationMap::match), or none
+  /// (the estimate is not one localized place, or the match failed): none starts the stretch again.
+  void measured(const std::optional<MatchResult>& match);
   /// Forgets the current stretch (the next measurement starts one): after a relocalization.
   void restart() { anchored_ = false; }
   /// Whether measured() would use a measurement now (learning on, and no stretch or a long one).
