@@ -1,12 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/localization/hybrid.hpp"
 
+#include <cmath>
+#include <optional>
+
 #include "slam2d/core/error.hpp"
+#include "slam2d/localization/sensor_model.hpp"
 
 namespace slam2d {
 
 HybridLocalization::HybridLocalization(const LocalizationMap& map, const HybridConfig& config)
-    : config_(config), grid_(map, config.grid), ekf_(map, config.ekf) {
+    : map_(map), config_(config), grid_(map, config.grid), ekf_(map, config.ekf) {
   check_fields(config_, "HybridConfig");
 }
 
@@ -27,8 +31,8 @@ LocalizationEstimate HybridLocalization::update(const SE2& T_odom_robot, const L
   LocalizationEstimate result = grid;
   if (ekf_active_) {
     const LocalizationEstimate ekf = ekf_.update(T_odom_robot, scan);
-    const bool disagrees =
-        grid.localized && (ekf.pose.translation() - grid.pose.translation()).norm() > config_.max_disagreement;
+    const bool disagrees = grid.localized && (ekf.pose.translation() - grid.pose.translation()).norm() > config_.max_disagreement &&
+                           grid_explains_better(scan, grid.pose, ekf.pose);
     const bool lost = ekf_.lost();
     if (disagrees || lost) {
       ekf_active_ = false;
@@ -45,6 +49,19 @@ LocalizationEstimate HybridLocalization::update(const SE2& T_odom_robot, const L
   }
   if (grid_.sensor_updates() + ekf_.sensor_updates() > before) ++sensor_updates_;
   return result;
+}
+
+bool HybridLocalization::grid_explains_better(const LaserScan& scan, const SE2& grid_pose, const SE2& ekf_pose) const {
+  const ScanBeams beams = select_beams(scan, config_.ekf.max_beams, config_.ekf.usable_range);
+  if (beams.points_robot.empty()) return false;
+  const auto fit = [&](const SE2& pose) {
+    const std::optional<MatchResult> match = map_.match(beams.points_robot, pose, config_.matcher);
+    return map_.plausibility(beams.points_robot, match ? match->T_target_source : pose, config_.grid.status.plausibility_distance);
+  };
+  const double grid = fit(grid_pose);
+  const double ekf = fit(ekf_pose);
+  const double n = static_cast<double>(beams.points_robot.size());
+  return grid - ekf > config_.takeover_z * std::sqrt((grid * (1.0 - grid) + ekf * (1.0 - ekf)) / n);
 }
 
 }  // namespace slam2d

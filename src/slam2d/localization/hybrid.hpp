@@ -10,6 +10,13 @@
 //   - the grid is localized (unique) at a pose more than max_disagreement from the EKF's;
 // and the EKF is restarted from the grid's estimate as soon as the grid is unique again.
 // The estimate reported is the EKF's while it runs, else the grid's.
+// Where the two disagree, the one the scan supports wins (issue 40's consistency test): the grid
+// takes over from a running EKF only if the scan fits the map significantly better at its pose
+// than at the EKF's. The fit is the plausibility (the share of end points near an obstacle) at
+// the scan matched from each pose (`matcher`: the grid's pose is known only to a cell); better by
+// `takeover_z` standard errors of the difference of the two shares (binomial, n end points). A
+// grid that a degraded scanner led astray (spurious short readings) so no longer resets a tracking
+// EKF to its wrong place; after a kidnap the EKF's pose explains little and the grid wins.
 
 #include <cstddef>
 #include <string>
@@ -24,6 +31,8 @@ struct HybridConfig {
                         .update_angle = 0.1745};
   EkfConfig ekf{};
   double max_disagreement = 1.5;
+  LikelihoodFieldMatchConfig matcher{};
+  double takeover_z = 2.0;
 };
 
 template <typename Fields>
@@ -31,7 +40,10 @@ void describe(Fields& f, HybridConfig& c) {
   f.section("grid", c.grid, "the Markov grid that keeps the global belief");
   f.section("ekf", c.ekf, "the EKF that tracks");
   f.number("max_disagreement", c.max_disagreement, "m", greater_than(0),
-           "the grid takes over when localized farther than this from the EKF");
+           "the grid takes over when localized farther than this from the EKF ...");
+  f.section("matcher", c.matcher, "... and the scan, matched from each of the two poses, ...");
+  f.number("takeover_z", c.takeover_z, "1", at_least(0),
+           "... fits the map better at the grid's by this many standard errors of the difference");
 }
 
 class HybridLocalization : public Localizer {
@@ -52,6 +64,10 @@ class HybridLocalization : public Localizer {
   const MarkovGridLocalization& grid() const { return grid_; }
 
  private:
+  /// Whether the scan fits the map significantly better at `grid_pose` than at `ekf_pose` (header).
+  bool grid_explains_better(const LaserScan& scan, const SE2& grid_pose, const SE2& ekf_pose) const;
+
+  const LocalizationMap& map_;
   HybridConfig config_;
   MarkovGridLocalization grid_;
   EkfLocalization ekf_;
