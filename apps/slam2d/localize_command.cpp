@@ -118,9 +118,7 @@ void run_localize(const LocalizeOptions& options) {
     summary.add("odometry_noise_stretches", noise->stretches());
     summary.add("odometry_noise_scale_translation", noise->translation_scale());
     summary.add("odometry_noise_scale_rotation", noise->rotation_scale());
-    summary.add("odometry_calibration_translation_scale", noise->calibration().translation_scale());
-    summary.add("odometry_calibration_rotation_scale", noise->calibration().rotation_scale());
-    summary.add("odometry_calibration_drift_rad_per_m", noise->calibration().drift_per_metre());
+    summary.merge(calibration_report(noise->calibration()));
   }
   summary.add("odometry_smoothing", smoothing_report(smoothing));
   summary.add("converged_at_s", run.converged_at_s);

@@ -76,6 +76,8 @@ struct OdometryFeed {
   Trajectory trajectory;
   std::string name;       // what the messages call it
   bool uses_odometry() const { return kind != Kind::kNone; }
+  // A sensor of its own (the log's odometry, a trajectory file's), not poses the laser gave (Hector's).
+  bool is_own_sensor() const { return kind == Kind::kLog || kind == Kind::kTrajectory; }
 
   static OdometryFeed none() { return {Kind::kNone, {}, "none"}; }
   static OdometryFeed from(Trajectory trajectory, std::string name) {
@@ -117,8 +119,7 @@ struct IgnoreImu {
 // only with an odometry that is a sensor of its own (the log's, a trajectory file's); Hector's,
 // the laser's, would share the method's errors.
 bool smoothed_with_odometry(const MapJobOptions& options, const OdometryFeed& feed) {
-  const bool own_sensor = feed.kind == OdometryFeed::Kind::kLog || feed.kind == OdometryFeed::Kind::kTrajectory;
-  return options.odometry_smoothing && options.method != "odometry" && own_sensor;
+  return options.odometry_smoothing && options.method != "odometry" && feed.is_own_sensor();
 }
 
 // The smoothing's third stream: PL-ICP scan odometry against the last keyframe alone (its
@@ -285,6 +286,10 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
 MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed) {
   check(feed.uses_odometry(), "map: rbpf needs a motion input");
   RbpfConfig config = read_method_preset(options.config, "rbpf", RbpfConfig{});
+  // The learnt prior weighs the odometry as a measurement of its own. Hector's poses (hector+rbpf,
+  // rbpf without wheel odometry) come from the same scans, so how well they agree with the matches
+  // says nothing of their noise: the fixed weak prior there.
+  if (!feed.is_own_sensor()) config.scan_odometry_prior_from_motion_noise = false;
   if (options.particles) config.particles = *options.particles;
   if (options.seed) config.seed = *options.seed;
   if (options.threads) config.threads = *options.threads;
@@ -301,6 +306,11 @@ MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed)
   run.method_summary.add("threads", config.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
+  if (config.scan_odometry_prior_from_motion_noise) {
+    run.method_summary.add("odometry_noise_scale_translation", slam.scan_odometry_noise().translation_scale());
+    run.method_summary.add("odometry_noise_scale_rotation", slam.scan_odometry_noise().rotation_scale());
+    if (config.scan_odometry_calibration.window > 0.0) run.method_summary.merge(calibration_report(slam.scan_odometry_calibration()));
+  }
   report_odometry(run, slam.odometry_stats());
   return run;
 }

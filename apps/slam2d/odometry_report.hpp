@@ -35,6 +35,16 @@ inline JsonObject fusion_report(const MotionFusionStats& stats, const OdometryNo
   return report;
 }
 
+/// The odometry's systematic error a method learnt (core/motion_fusion.hpp's OdometryCalibration).
+inline JsonObject calibration_report(const OdometryCalibration& calibration) {
+  JsonObject report;
+  report.add("odometry_calibration_stretches", calibration.observations());
+  report.add("odometry_calibration_translation_scale", calibration.translation_scale());
+  report.add("odometry_calibration_rotation_scale", calibration.rotation_scale());
+  report.add("odometry_calibration_drift_rad_per_m", calibration.drift_per_metre());
+  return report;
+}
+
 /// What the per-scan smoothing with the odometry found (slam/fusion/odometry_smoothing.hpp): the
 /// jitters and drift scales it estimated, the steps it refused, the largest move of a pose.
 inline JsonObject smoothing_report(const OdometrySmoothingStats& stats) {

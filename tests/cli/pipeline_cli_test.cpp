@@ -135,6 +135,28 @@ TEST_F(PipelineCli, TheParticleFilterRunsWithoutWheelOdometry) {
   EXPECT_LT(ate_rmse(none.file("trajectory.txt")), 0.15);
 }
 
+// The RBPF's learnt odometry prior weighs the odometry as a sensor of its own: on the log's wheel
+// odometry it learns (and reports) its scales; on Hector's poses, from the same scans, it is not
+// used, whatever the preset says.
+TEST_F(PipelineCli, TheLearntOdometryPriorIsForAnOdometryOfItsOwn) {
+  TempDir config;
+  {
+    std::ofstream out(config.file("rbpf.yaml"));
+    out << "method: rbpf\nscan_odometry_prior_from_motion_noise: true\nscan_odometry_calibration:\n  window: 100\n";
+  }
+  const std::string arguments = " --particles 5 --seed 2 --config " + config.file("rbpf.yaml");
+  TempDir wheel;
+  const CommandResult learnt = map(wheel, "--method rbpf" + arguments);
+  ASSERT_EQ(learnt.exit_code, 0) << learnt.errors;
+  EXPECT_NE(learnt.output.find("\"odometry_noise_scale_translation\""), std::string::npos) << learnt.output;
+  EXPECT_GT(json_number(learnt.output, "odometry_calibration_stretches").value_or(0.0), 10.0);
+  TempDir chain;
+  const CommandResult fixed = map(chain, "--method hector+rbpf" + arguments);
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.errors;
+  EXPECT_EQ(fixed.output.find("odometry_noise_scale"), std::string::npos) << fixed.output;
+  EXPECT_EQ(fixed.output.find("odometry_calibration"), std::string::npos) << fixed.output;
+}
+
 TEST_F(PipelineCli, WhatCannotBeDoneIsRefusedWithoutOutput) {
   for (const std::string& arguments :
        {std::string("--method graph --odometry-source /nonexistent/odometry.txt"), std::string("--method graph --scan-rate 0"),

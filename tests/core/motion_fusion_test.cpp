@@ -159,6 +159,26 @@ TEST(OdometryCalibration, FindsTheScalesAndTheDriftOfAWheelOdometry) {
   EXPECT_NEAR(calibration.rotation_scale(), 1.0 / 1.03, 0.01);
   // The drift per metre of odometry distance: 0.05 rad per true metre, 1.04 true metres in one.
   EXPECT_NEAR(calibration.drift_per_metre(), 0.05 * 1.04, 0.005);
+  // Corrected, an increment of that odometry is the robot's own motion, backwards too.
+  for (const double path : {0.5, -0.3}) {
+    const double turn = 0.2;
+    const SE2 read(path * std::cos(0.5 * turn), path * std::sin(0.5 * turn), turn);
+    const double true_turn = turn / 1.03 + 0.05 * 1.04 * path;
+    const SE2 robot(1.04 * path * std::cos(0.5 * true_turn), 1.04 * path * std::sin(0.5 * true_turn), true_turn);
+    EXPECT_LT(motion_difference(calibration.corrected(read), robot).cwiseAbs().maxCoeff(), 0.008) << path;
+  }
+}
+
+// The stretch a calibration compares: the increments composed, their signed turn and their signed
+// path length (backwards negative).
+TEST(OdometryStretch, AddsUpTheIncrementsWithTheirSigns) {
+  OdometryStretch stretch;
+  stretch.add(SE2(0.5, 0.0, 0.3));
+  stretch.add(SE2(-0.2, 0.0, -0.1));
+  EXPECT_NEAR(stretch.turn, 0.2, 1e-12);
+  EXPECT_NEAR(stretch.path, 0.3, 1e-12);
+  const SE2 expected = SE2(0.5, 0.0, 0.3) * SE2(-0.2, 0.0, -0.1);
+  EXPECT_LT(motion_difference(stretch.displacement, expected).norm(), 1e-12);
 }
 
 TEST(OdometryCalibration, AWindowOfZeroCorrectsNothing) {

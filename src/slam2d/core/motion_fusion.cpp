@@ -101,6 +101,29 @@ double OdometryCalibration::drift_per_metre() const {
   return std::clamp(rotation_.y() / (1.0 - rotation_.x()), -config_.max_correction, config_.max_correction);
 }
 
+namespace {
+
+// Forwards positive: the heading drift of unequal wheels turns with the direction of travel.
+double signed_distance(const SE2& increment) {
+  const double distance = increment.translation().norm();
+  return increment.x() < 0.0 ? -distance : distance;
+}
+
+}  // namespace
+
+SE2 OdometryCalibration::corrected(const SE2& increment) const {
+  const double extra = (rotation_scale() - 1.0) * increment.theta() + drift_per_metre() * signed_distance(increment);
+  // The chord of an arc turns by half the arc's turn.
+  const Eigen::Vector2d t = Eigen::Rotation2Dd(0.5 * extra) * (translation_scale() * increment.translation());
+  return SE2(t.x(), t.y(), increment.theta() + extra);
+}
+
+void OdometryStretch::add(const SE2& increment) {
+  displacement = displacement * increment;
+  turn += increment.theta();
+  path += signed_distance(increment);
+}
+
 OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config)
     : config_(config),
       translation_scale_(config.window, config.min_scale, config.max_scale),

@@ -130,6 +130,9 @@ class OdometryCalibration {
   double drift_per_metre() const;    // rad per metre of the odometry's (signed) path
   std::size_t observations() const { return observations_; }
 
+  /// The odometry's increment (T_previous_current) corrected for the error learnt so far.
+  SE2 corrected(const SE2& increment) const;
+
  private:
   OdometryCalibrationConfig config_;
   // Forgetting normal equations: rotation on (turn, path), translation on distance.
@@ -140,6 +143,16 @@ class OdometryCalibration {
   Eigen::Vector2d rotation_ = Eigen::Vector2d::Zero();  // the fit (a, b), in observe()
   double translation_ = 0.0;                            // c
   std::size_t observations_ = 0;
+};
+
+/// The odometry's increments since a measured pose, as the odometry measured them: what a stretch
+/// of OdometryCalibration compares with the measured motion.
+struct OdometryStretch {
+  SE2 displacement;   // the increments composed
+  double turn = 0.0;  // their signed turn, rad
+  double path = 0.0;  // their signed path length, m (backwards negative)
+
+  void add(const SE2& increment);
 };
 
 /// The odometry's motion noise with its online scales (translation and rotation).

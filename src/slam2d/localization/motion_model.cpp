@@ -112,23 +112,7 @@ MotionNoiseLearner::MotionNoiseLearner(const OdometryMotionConfig& model, const 
   check_fields(config_, "MotionNoiseLearningConfig");
 }
 
-namespace {
-
-// Forwards positive: the heading drift of unequal wheels turns with the direction of travel.
-double signed_distance(const SE2& increment) {
-  const double distance = increment.translation().norm();
-  return increment.x() < 0.0 ? -distance : distance;
-}
-
-}  // namespace
-
-SE2 MotionNoiseLearner::corrected(const SE2& increment) const {
-  const double extra = (calibration_.rotation_scale() - 1.0) * increment.theta() +
-                       calibration_.drift_per_metre() * signed_distance(increment);
-  // The chord of an arc turns by half the arc's turn.
-  const Eigen::Vector2d t = Eigen::Rotation2Dd(0.5 * extra) * (calibration_.translation_scale() * increment.translation());
-  return SE2(t.x(), t.y(), increment.theta() + extra);
-}
+SE2 MotionNoiseLearner::corrected(const SE2& increment) const { return calibration_.corrected(increment); }
 
 OdometryMotionConfig MotionNoiseLearner::model() const {
   const double t = translation_.scale();
@@ -146,9 +130,7 @@ OdometryMotionConfig MotionNoiseLearner::model() const {
 OdometryControl MotionNoiseLearner::move(const SE2& increment) {
   const OdometryControl u = decompose_odometry(SE2(), corrected(increment));
   if (!anchored_ || (config_.window <= 0.0 && config_.calibration.window <= 0.0)) return u;
-  raw_stretch_ = raw_stretch_ * increment;
-  raw_turn_ += increment.theta();
-  raw_path_ += signed_distance(increment);
+  raw_.add(increment);
   // The covariance propagates linearly (G P G^T + V M V^T): the two shares add up to the model's.
   from_translation_ = predict_odometry_motion(stretch_, from_translation_, u, translation_noise_).covariance;
   const MotionPrediction rotation = predict_odometry_motion(stretch_, from_rotation_, u, rotation_noise_);
@@ -163,9 +145,10 @@ void MotionNoiseLearner::start(const SE2& pose, const Covariance3& covariance) {
   anchored_ = true;
   anchor_ = pose;
   anchor_covariance_ = covariance;
-  stretch_ = raw_stretch_ = SE2();
+  stretch_ = SE2();
+  raw_ = OdometryStretch{};
   from_translation_ = from_rotation_ = Covariance3::Zero();
-  travelled_ = turned_ = raw_turn_ = raw_path_ = 0.0;
+  travelled_ = turned_ = 0.0;
 }
 
 namespace {
@@ -191,7 +174,7 @@ void MotionNoiseLearner::learn_odometry_noise(const Eigen::Vector3d& e, const Co
 void MotionNoiseLearner::learn_calibration(const SE2& increment, const Covariance3& measured) {
   const double r2 = rotation_.scale() * rotation_.scale();
   const double t2 = translation_.scale() * translation_.scale();
-  calibration_.observe(raw_turn_, raw_path_, raw_stretch_.translation(), increment.theta(), increment.translation(),
+  calibration_.observe(raw_.turn, raw_.path, raw_.displacement.translation(), increment.theta(), increment.translation(),
                        measured(2, 2) + r2 * from_rotation_(2, 2),
                        planar(measured) + t2 * planar(from_translation_) + r2 * planar(from_rotation_));
 }

@@ -166,9 +166,7 @@ class MotionNoiseLearner {
   SE2 anchor_;                     // the measured pose the stretch starts at
   Covariance3 anchor_covariance_;  // its covariance (map frame)
   SE2 stretch_;                    // the odometry's increment since the anchor, corrected
-  SE2 raw_stretch_;                // ... as the odometry measured it
-  double raw_turn_ = 0.0;          // its signed turn, rad
-  double raw_path_ = 0.0;          // its signed path length, m (backwards negative)
+  OdometryStretch raw_;            // ... as the odometry measured it
   Covariance3 from_translation_;   // its covariance under the unscaled model's translation noise
   Covariance3 from_rotation_;      // ... and rotation noise
   double travelled_ = 0.0;

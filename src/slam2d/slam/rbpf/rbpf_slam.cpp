@@ -49,6 +49,10 @@ RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
   return matching;
 }
 
+// A stretch of the odometry calibration ends after this many metres or radians (the localizers'
+// span, localization/motion_model.hpp).
+constexpr double kCalibrationSpan = 0.5;
+
 // Independent streams: one per (update, particle), one per update for the resampler (particle = N).
 Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
   return Rng(mix_seed(mix_seed(seed) ^ mix_seed((static_cast<std::uint64_t>(update) << 20) ^ particle)));
@@ -72,7 +76,10 @@ RbpfPathNode::~RbpfPathNode() {
 }
 
 RbpfSlam::RbpfSlam(const RbpfConfig& config)
-    : config_(config), odometry_guard_(config.odometry_guard), scan_odometry_noise_(config.scan_odometry_noise) {
+    : config_(config),
+      odometry_guard_(config.odometry_guard),
+      scan_odometry_noise_(config.scan_odometry_noise),
+      scan_odometry_calibration_(config.scan_odometry_calibration) {
   validate(config_);
   const int threads = std::min(config_.threads == 0 ? tbb::info::default_concurrency() : config_.threads,
                                config_.particles);
@@ -212,13 +219,14 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
     // The previous scan's pose in the best particle's map, the prediction, the match.
     const RbpfParticle& particle = best();
     const SE2 previous = particle.T_map_robot * update_odometry_.back().between(last_corrected_odometry_);
-    const SE2 predicted = previous * delta;
+    const SE2 predicting = calibrating() && odometry.trusted() ? scan_odometry_calibration_.corrected(delta) : delta;
+    const SE2 predicted = previous * predicting;
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
     RbpfProposalConfig matching = scan_odometry_matching(config_);
     if (!odometry.trusted()) matching.motion_prior_weight = 0.0;
     const ProposalResult match =
-        improved_proposal(particle.map, points, predicted, scan_odometry_sigmas(delta), matching, /*fit=*/false);
-    learn_odometry_noise(odometry, delta, previous, match);
+        improved_proposal(particle.map, points, predicted, scan_odometry_sigmas(predicting), matching, /*fit=*/false);
+    learn_odometry_noise(odometry, predicting, previous, match);
     std::optional<SE2> matched = match.matched ? std::optional(match.x_star) : std::nullopt;
     if (odometry.fault == OdometryFault::kCatchUp) {
       const ProposalResult second = improved_proposal(particle.map, points, previous, motion_sigmas(SE2(), config_.motion),
@@ -230,6 +238,7 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
       if (alternative_cost < kCompetingStartAdvantage * cost) matched = alternative;
     }
     if (matched) corrected = last_corrected_odometry_ * previous.between(*matched);
+    learn_odometry_calibration(odometry, delta, match, corrected);
   }
   last_corrected_odometry_ = corrected;
   if (odometry.moved) last_moved_corrected_ = corrected;
@@ -254,6 +263,32 @@ void RbpfSlam::learn_odometry_noise(const OdometryCheck& odometry, const SE2& de
                                  rotate_covariance(last_match_covariance_ + match.match_covariance, -previous.theta()));
   }
   last_match_covariance_ = match.matched ? match.match_covariance : unknown_covariance();
+}
+
+// The odometry's systematic error learnt over stretches of the scan-matched odometry (whose
+// motion between two matched scans is the measurement; its uncertainty the two matches' and the
+// odometry noise of the increments between them). A scan whose increment the guard did not trust,
+// or that did not match, ends the stretch unlearnt.
+void RbpfSlam::learn_odometry_calibration(const OdometryCheck& odometry, const SE2& delta, const ProposalResult& match,
+                                          const SE2& corrected) {
+  if (!calibrating()) return;
+  CalibrationStretch& stretch = calibration_stretch_;
+  const bool usable = odometry.trusted() && match.matched;
+  if (usable && stretch.anchored) {
+    stretch.raw.add(delta);
+    stretch.odometry_covariance += scan_odometry_noise_.covariance(delta);
+    if (std::abs(stretch.raw.path) < kCalibrationSpan && std::abs(stretch.raw.turn) < kCalibrationSpan) return;
+    const SE2 measured = stretch.anchor.between(corrected);
+    const Covariance3 total = stretch.anchor_covariance + match.match_covariance + stretch.odometry_covariance;
+    scan_odometry_calibration_.observe(stretch.raw.turn, stretch.raw.path, stretch.raw.displacement.translation(),
+                                       measured.theta(), measured.translation(), total(2, 2),
+                                       0.5 * (total(0, 0) + total(1, 1)));
+  }
+  stretch = CalibrationStretch{};
+  if (!usable) return;
+  stretch.anchored = true;
+  stretch.anchor = corrected;
+  stretch.anchor_covariance = match.match_covariance;
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {

@@ -83,11 +83,19 @@ struct RbpfConfig {
   // sigmas off wins). A good odometry so holds the match where the scan says little (glass, a
   // noisy laser), a poor one lets the scan lead. Off by default: over seeds 1-3 it lowers the
   // error at 10 s under glass, a noisy laser and mixed pixels on Intel and ACES (ACES with glass
-  // 0.078 -> 0.043 m), but the clean runs close their loops less well (over all relations, Intel
-  // 0.018 -> 0.037 m, ACES 0.041 -> 0.091 m: docs/fusion_by_uncertainty.md, "The RBPF's per-scan
-  // matching").
+  // 0.078 -> 0.043 m), but Intel's clean loops fail in 5 of 10 filter seeds (0.036-0.057 m over
+  // all relations; the defaults 0.017-0.019 m); ACES over 20 seeds keeps the defaults' odds
+  // (docs/fusion_by_uncertainty.md, "The RBPF's per-scan matching", "Over more seeds").
   bool scan_odometry_prior_from_motion_noise = false;
   OdometryNoiseConfig scan_odometry_noise{};
+  // With that prior, the odometry's systematic error (a scale of distance, of turn, a heading
+  // drift per metre: core/motion_fusion.hpp's OdometryCalibration) learnt from the same matches
+  // over stretches of half a metre, each increment corrected before it predicts: a per-scan noise
+  // model does not describe a slow heading error, which the prior would otherwise hand to the
+  // filter's motion input. It finds Intel's drift (0.059 rad/m) but does not change the run's
+  // odds over filter seeds, so it is off (window 0; 100 turns it on: docs/fusion_by_uncertainty.md,
+  // "The RBPF's per-scan matching").
+  OdometryCalibrationConfig scan_odometry_calibration{.window = 0.0};
   // Rotation multi-start of that per-scan matching (HectorMatcherConfig::rotation_search_*): the
   // prediction turned by k * step, |k * step| <= scan_odometry_rotation_search, is matched on the
   // coarsest level too, and a turned start goes on when it lowers the cost by the margin. Wheel
@@ -130,6 +138,8 @@ void describe(Fields& f, RbpfConfig& c) {
   f.flag("scan_odometry_prior_from_motion_noise", c.scan_odometry_prior_from_motion_noise,
          "that prior from the odometry's learnt motion noise (the exact product, Cauchy kernel) instead of the weight and motion");
   f.section("scan_odometry_noise", c.scan_odometry_noise, "the odometry's motion noise model for it (core/motion_fusion.hpp)");
+  f.section("scan_odometry_calibration", c.scan_odometry_calibration,
+            "with that prior, the odometry's systematic error learnt from the matches and corrected (window 0: off)");
   f.number("scan_odometry_rotation_search", c.scan_odometry_rotation_search, "rad", at_least(0),
            "rotation multi-start of that matching (0: off)");
   f.number("scan_odometry_rotation_step", c.scan_odometry_rotation_step, "rad", greater_than(0), "its step");
@@ -205,6 +215,9 @@ class RbpfSlam {
   const RbpfStats& stats() const { return stats_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
   const RbpfConfig& config() const { return config_; }
+  /// What the per-scan matching learnt of the odometry (config.scan_odometry_prior_from_motion_noise).
+  const OdometryNoiseModel& scan_odometry_noise() const { return scan_odometry_noise_; }
+  const OdometryCalibration& scan_odometry_calibration() const { return scan_odometry_calibration_; }
 
  private:
   bool needs_update(const SE2& T_odom_robot, double stamp) const;
@@ -226,6 +239,21 @@ class RbpfSlam {
   Eigen::Vector3d scan_odometry_sigmas(const SE2& delta) const;
   void learn_odometry_noise(const OdometryCheck& odometry, const SE2& delta, const SE2& previous,
                             const ProposalResult& match);
+  void learn_odometry_calibration(const OdometryCheck& odometry, const SE2& delta, const ProposalResult& match,
+                                  const SE2& corrected);
+  bool calibrating() const {
+    return config_.scan_odometry_prior_from_motion_noise && config_.scan_odometry_calibration.window > 0.0;
+  }
+
+  // A stretch of OdometryCalibration: from the scan-matched odometry pose at a matched scan to a
+  // later one, every increment between them trusted and matched.
+  struct CalibrationStretch {
+    bool anchored = false;
+    SE2 anchor;                      // scan-matched odometry pose it starts at
+    Covariance3 anchor_covariance = Covariance3::Zero();  // that scan's match covariance
+    OdometryStretch raw;             // the wheel odometry's increments since
+    Covariance3 odometry_covariance = Covariance3::Zero();  // their noise (the learnt model's), summed
+  };
 
   RbpfConfig config_;
   std::shared_ptr<RbpfWorkers> workers_;  // null when serial (threads resolve to 1)
@@ -233,6 +261,8 @@ class RbpfSlam {
   SE2 last_corrected_odometry_;  // scan-matched odometry at the previous scan
   OdometryNoiseModel scan_odometry_noise_;  // config.scan_odometry_prior_from_motion_noise
   Covariance3 last_match_covariance_ = unknown_covariance();  // of the previous scan's match
+  OdometryCalibration scan_odometry_calibration_;  // calibrating()
+  CalibrationStretch calibration_stretch_;
   SE2 last_moved_corrected_;     // ... at the last scan whose wheel-odometry pose moved
   std::vector<RbpfParticle> particles_;
   std::vector<ScanRecord> scans_;
