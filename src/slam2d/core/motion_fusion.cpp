@@ -151,7 +151,7 @@ void OdometryNoiseModel::observe(const SE2& increment, const SE2& measured, cons
   const Eigen::Vector3d e = motion_difference(increment, measured);
   if (!e.allFinite()) return;
   translation_scale_.observe(0.5 * e.head<2>().squaredNorm(), std::pow(sigma_translation(increment), 2),
-                             0.5 * (measured_covariance(0, 0) + measured_covariance(1, 1)));
+                             planar_variance(measured_covariance));
   rotation_scale_.observe(e.z() * e.z(), std::pow(sigma_rotation(increment), 2), measured_covariance(2, 2));
 }
 

@@ -181,6 +181,9 @@ class OdometryNoiseModel {
   NoiseScaleEstimate rotation_scale_;
 };
 
+/// The mean of a covariance's x and y variances: the variance per translational degree of freedom.
+inline double planar_variance(const Covariance3& c) { return 0.5 * (c(0, 0) + c(1, 1)); }
+
 /// b - a in (x, y, theta), the heading's difference wrapped: how far two estimates of one small
 /// increment disagree.
 Eigen::Vector3d motion_difference(const SE2& a, const SE2& b);

@@ -153,8 +153,6 @@ void MotionNoiseLearner::start(const SE2& pose, const Covariance3& covariance) {
 
 namespace {
 
-double planar(const Covariance3& c) { return 0.5 * (c(0, 0) + c(1, 1)); }
-
 constexpr double kTiny = 1e-12;  // a variance this small teaches nothing
 
 }  // namespace
@@ -164,8 +162,9 @@ constexpr double kTiny = 1e-12;  // a variance this small teaches nothing
 void MotionNoiseLearner::learn_odometry_noise(const Eigen::Vector3d& e, const Covariance3& measured) {
   if (from_rotation_(2, 2) > kTiny) rotation_.observe(e.z() * e.z(), from_rotation_(2, 2), measured(2, 2));
   const double r2 = rotation_.scale() * rotation_.scale();
-  if (planar(from_translation_) > kTiny) {
-    translation_.observe(0.5 * e.head<2>().squaredNorm(), planar(from_translation_), planar(measured) + r2 * planar(from_rotation_));
+  if (planar_variance(from_translation_) > kTiny) {
+    translation_.observe(0.5 * e.head<2>().squaredNorm(), planar_variance(from_translation_),
+                         planar_variance(measured) + r2 * planar_variance(from_rotation_));
   }
 }
 
@@ -176,7 +175,8 @@ void MotionNoiseLearner::learn_calibration(const SE2& increment, const Covarianc
   const double t2 = translation_.scale() * translation_.scale();
   calibration_.observe(raw_.turn, raw_.path, raw_.displacement.translation(), increment.theta(), increment.translation(),
                        measured(2, 2) + r2 * from_rotation_(2, 2),
-                       planar(measured) + t2 * planar(from_translation_) + r2 * planar(from_rotation_));
+                       planar_variance(measured) + t2 * planar_variance(from_translation_) +
+                           r2 * planar_variance(from_rotation_));
 }
 
 void MotionNoiseLearner::measured(const SE2& pose, const Covariance3& covariance) {

@@ -282,7 +282,7 @@ void RbpfSlam::learn_odometry_calibration(const OdometryCheck& odometry, const S
     const Covariance3 total = stretch.anchor_covariance + match.match_covariance + stretch.odometry_covariance;
     scan_odometry_calibration_.observe(stretch.raw.turn, stretch.raw.path, stretch.raw.displacement.translation(),
                                        measured.theta(), measured.translation(), total(2, 2),
-                                       0.5 * (total(0, 0) + total(1, 1)));
+                                       planar_variance(total));
   }
   stretch = CalibrationStretch{};
   if (!usable) return;
