@@ -16,7 +16,11 @@ alone (`slam2d map LOG2 --method odometry`: its odometry poses as the trajectory
 method starts from. The last column is the relations scored in the perturbed / the clean run:
 decimate, scan-rate and scan-gap remove scans, so some relations have no pose; then the clean
 error is the clean run's over the same relations (its poses at the scans the perturbed run kept),
-so the ratio compares like with like. Faults that move stamps (jitter, backwards) are scored at
+so the ratio compares like with like. Every run is also scored on the relations at most 10 s apart
+(SHORT_SPAN); --harm prints the do-no-harm table of issue 40 from both scores: per log and
+condition (the clean log included) the odometry's and each method's error at 10 s / over all,
+bold where the method is above the odometry at 10 s, + where over all it exceeds 1.5x its clean
+error. Faults that move stamps (jitter, backwards) are scored at
 the original stamps: the method sees the moved ones, then its trajectory's scan i gets
 the original scan i's stamp back before `slam2d eval`.
 
@@ -40,7 +44,7 @@ scans, not seconds ('every=60' is every 60 scans).
 Usage: bench/datasets/robustness_benchmark.py [--slam2d build/release/bin/slam2d] [--data $SLAM2D_DATA]
            [--logs intel aces fr079] [--faults stall decimate ...] [--severities mild severe]
            [--methods hector graph rbpf pl-icp] [--seed 1] [--jobs 1] [--quick] [--corrected]
-           [--out /tmp/slam2d_robustness_benchmark] [--resume] [--json]
+           [--out /tmp/slam2d_robustness_benchmark] [--resume] [--json] [--harm]
 --quick: aces only, the severe severity, faults stall, wheel-scale, decimate, range-max and
 spurious-short, methods hector and pl-icp (with --corrected: edmonton and seattle); an explicit
 --logs/--faults/--severities/--methods wins over the --quick choice. --resume reuses the results
@@ -159,10 +163,11 @@ def after_convergence(trajectory, converged_at_s, out):
     return out
 
 
-def run_method(args, method, log, out_dir, eval_arguments, original_log=None, localization=None):
+def run_method(args, method, log, out_dir, eval_arguments, original_log=None, localization=None, short_span=None):
     """Runs the method and the evaluation; keeps the result in out_dir/result.json (for --resume).
     With original_log, the trajectory's stamps are first mapped back to that log's (restore_stamps).
-    A global localization is scored after it converged (converged_at_s is kept in the result)."""
+    A global localization is scored after it converged (converged_at_s is kept in the result).
+    With short_span (s), the relations at most that far apart are scored as well (error_short)."""
     result_path = os.path.join(out_dir, "result.json")
     if args.resume and os.path.exists(result_path):
         with open(result_path) as f:
@@ -182,6 +187,9 @@ def run_method(args, method, log, out_dir, eval_arguments, original_log=None, lo
         error = run_json([args.slam2d, "eval", trajectory, *eval_arguments, "--json"])
         result = {"error": error, "cpu_s": summary.get("cpu_s"), "converged_at_s": converged_at_s,
                   "warnings": summary.get("warnings"), "command": " ".join(command)}
+        if short_span is not None:
+            result["error_short"] = run_json([args.slam2d, "eval", trajectory, *eval_arguments, "--max-span",
+                                              str(short_span), "--json"])
     except (RuntimeError, json.JSONDecodeError) as failure:
         result = {"error": None, "failure": str(failure), "command": " ".join(command)}
     with open(result_path, "w") as f:
@@ -209,6 +217,12 @@ def ratio(value, clean):
 
 # ---------------------------------------------------------------------------------------------
 # Public logs against their relations.
+
+# The do-no-harm rule of issue 40 on the public logs: a method given odometry is no worse than that
+# odometry alone on the relations at most SHORT_SPAN s apart, and within HARM_RATIO times its clean
+# error over all relations.
+SHORT_SPAN = 10.0
+HARM_RATIO = 1.5
 
 def public_benchmark(args):
     logs_dir = os.path.join(args.out, "logs")
@@ -240,29 +254,37 @@ def public_benchmark(args):
         source = original if fault == "clean" else perturbed_path(log, fault, severity)
         out_dir = os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
         return run_method(args, method, source, out_dir, relations, original if fault in RESTAMP else None,
-                          localization.get(log))
+                          localization.get(log), SHORT_SPAN)
 
     def run_dir(log, fault, severity, method):
         return os.path.join(args.out, "runs", f"{method}_{log}_{fault}_{severity}")
 
-    runs = [(log, "clean", "-", method) for log in args.logs for method in args.methods]
+    runs = [(log, "clean", "-", method) for log in args.logs for method in args.methods + ["odometry"]]
     runs += [(log, fault, severity, method) for (log, fault, severity) in cases for method in args.methods + ["odometry"]]
     results = dict(zip(runs, parallel(args, run, runs)))
     rows = []
     for (log, fault, severity, method), result in results.items():
         if method == "odometry":
             continue
-        odometry = results.get((log, fault, severity, "odometry"), {}).get("error")  # none for the clean rows
+        odometry_run = results.get((log, fault, severity, "odometry"), {})
+        odometry, odometry_short = odometry_run.get("error"), odometry_run.get("error_short")
         clean = results[log, "clean", "-", method]["error"]
+        clean_short = results[log, "clean", "-", method].get("error_short")
         if clean and result["error"] and result["error"]["relations"] != clean["relations"]:
-            clean = clean_on_same_scans(args, run_dir(log, "clean", "-", method), run_dir(log, fault, severity, method),
-                                        os.path.join(args.data, LOGS[log][1]))
+            same_scans = (args, run_dir(log, "clean", "-", method), run_dir(log, fault, severity, method),
+                          os.path.join(args.data, LOGS[log][1]))
+            clean = clean_on_same_scans(*same_scans)
+            clean_short = clean_on_same_scans(*same_scans, ["--max-span", str(SHORT_SPAN)]) if clean_short else None
         value = result["error"]["trans_mean"] if result["error"] else None
+        short = result.get("error_short")
         clean_value = clean["trans_mean"] if clean else None
         rows.append({"log": log, "fault": fault, "severity": severity,
                      "spec": spec_of.get((fault, severity), ""), "method": method,
                      "trans_mean_m": value, "clean_trans_mean_m": clean_value, "ratio": ratio(value, clean_value),
                      "odometry_trans_mean_m": odometry["trans_mean"] if odometry else None,
+                     "short_trans_mean_m": short["trans_mean"] if short else None,
+                     "clean_short_trans_mean_m": clean_short["trans_mean"] if clean_short else None,
+                     "odometry_short_trans_mean_m": odometry_short["trans_mean"] if odometry_short else None,
                      "rot_mean_deg": result["error"]["rot_mean_deg"] if result["error"] else None,
                      "relations": result["error"]["relations"] if result["error"] else None,
                      "clean_relations": clean["relations"] if clean else None,
@@ -272,9 +294,9 @@ def public_benchmark(args):
     return rows, changes
 
 
-def clean_on_same_scans(args, clean_dir, perturbed_dir, relations):
+def clean_on_same_scans(args, clean_dir, perturbed_dir, relations, eval_options=()):
     """The clean run's relation error over the scans the perturbed run kept (decimate, scan-gap),
-    so that both are scored on the same relations."""
+    so that both are scored on the same relations (eval_options: e.g. --max-span S)."""
     kept = set()
     for name in ("trajectory_original_stamps.txt", "trajectory.txt"):
         path = os.path.join(perturbed_dir, name)
@@ -285,7 +307,7 @@ def clean_on_same_scans(args, clean_dir, perturbed_dir, relations):
     subset = os.path.join(perturbed_dir, "clean_same_scans.txt")
     with open(os.path.join(clean_dir, "trajectory.txt")) as f, open(subset, "w") as out:
         out.writelines(line for line in f if line.strip() and not line.startswith("#") and float(line.split()[0]) in kept)
-    return run_json([args.slam2d, "eval", subset, "--relations", relations, "--json"])
+    return run_json([args.slam2d, "eval", subset, "--relations", relations, *eval_options, "--json"])
 
 
 def print_public_table(rows):
@@ -297,6 +319,44 @@ def print_public_table(rows):
         print(f"| {r['log']} | {r['fault']} | {r['severity']} | `{r['spec']}` | {r['method']} | {fmt(r['clean_trans_mean_m'])}"
               f" | {fmt(r['trans_mean_m']) if r['trans_mean_m'] is not None else 'failed'} | {fmt(r['ratio'], 2)}"
               f" | {fmt(r['odometry_trans_mean_m'])} | {r['relations']}/{r['clean_relations']} |")
+
+
+def print_public_harm_table(rows, methods):
+    """The do-no-harm table of issue 40 on the public logs: per log and condition, the odometry's
+    and each method's error on the relations at most SHORT_SPAN s apart / over all relations (m);
+    bold where the method is above the odometry at SHORT_SPAN s, + where its error over all
+    relations exceeds HARM_RATIO times its clean one (on the same scans)."""
+    print(f"error on relations at most {SHORT_SPAN:g} s apart / over all relations (m); **bold**: above the odometry"
+          f" at {SHORT_SPAN:g} s; +: over all relations more than {HARM_RATIO:g}x the method's clean error")
+    print()
+    print("| log | condition | odometry | " + " | ".join(methods) + " |")
+    print("|---|---|---|" + "---|" * len(methods))
+    by_key = {(r["log"], r["fault"], r["severity"], r["method"]): r for r in rows}
+    harmed = unstable = cells = 0
+    conditions = [("clean", "-")] + list(dict.fromkeys((r["fault"], r["severity"]) for r in rows if r["fault"] != "clean"))
+    for log in dict.fromkeys(r["log"] for r in rows):
+        for fault, severity in conditions:
+            first = next((by_key.get((log, fault, severity, m)) for m in methods if (log, fault, severity, m) in by_key), None)
+            if first is None:
+                continue
+            odometry_short, odometry_all = first["odometry_short_trans_mean_m"], first["odometry_trans_mean_m"]
+            condition = "clean" if fault == "clean" else f"`{first['spec']}`"
+            cells_text = []
+            for method in methods:
+                r = by_key.get((log, fault, severity, method))
+                if r is None or r["trans_mean_m"] is None:
+                    cells_text.append("failed" if r else "-")
+                    continue
+                short, value = r["short_trans_mean_m"], r["trans_mean_m"]
+                worse = short is not None and odometry_short is not None and short > odometry_short
+                blown = r["ratio"] is not None and r["ratio"] > HARM_RATIO
+                harmed, unstable, cells = harmed + worse, unstable + blown, cells + 1
+                short_text = f"**{fmt(short, 4)}**" if worse else fmt(short, 4)
+                cells_text.append(f"{short_text} / {fmt(value)}{' +' if blown else ''}")
+            print(f"| {log} | {condition} | {fmt(odometry_short, 4)} / {fmt(odometry_all)} | " + " | ".join(cells_text) + " |")
+    print()
+    print(f"cells above the odometry at {SHORT_SPAN:g} s: {harmed} of {cells}; over all relations beyond"
+          f" {HARM_RATIO:g}x clean: {unstable}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -470,6 +530,8 @@ def main():
     parser.add_argument("--out", default="/tmp/slam2d_robustness_benchmark")
     parser.add_argument("--resume", action="store_true", help="reuse results already in --out")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--harm", action="store_true",
+                        help="public logs: print the do-no-harm table (10 s / all, against the odometry) instead")
     args = parser.parse_args()
 
     known_logs = CORRECTED_LOGS if args.corrected else list(LOGS)
@@ -498,6 +560,8 @@ def main():
     if args.json:
         json.dump({"seed": args.seed, "results": rows, "perturb": changes}, sys.stdout, indent=2)
         print()
+    elif args.harm:
+        print_public_harm_table(rows, args.methods)
     else:
         print_public_table(rows)
     for r in rows:
