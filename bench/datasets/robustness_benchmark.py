@@ -336,7 +336,7 @@ def print_public_harm_table(rows, methods):
     conditions = [("clean", "-")] + list(dict.fromkeys((r["fault"], r["severity"]) for r in rows if r["fault"] != "clean"))
     for log in dict.fromkeys(r["log"] for r in rows):
         for fault, severity in conditions:
-            first = next((by_key.get((log, fault, severity, m)) for m in methods if (log, fault, severity, m) in by_key), None)
+            first = next((by_key[log, fault, severity, m] for m in methods if (log, fault, severity, m) in by_key), None)
             if first is None:
                 continue
             odometry_short, odometry_all = first["odometry_short_trans_mean_m"], first["odometry_trans_mean_m"]

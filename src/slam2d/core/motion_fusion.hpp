@@ -145,6 +145,11 @@ class OdometryCalibration {
   std::size_t observations_ = 0;
 };
 
+/// A stretch of the odometry compared with the measured motion ends after this much travel (m) or
+/// turn (rad): long enough for the matches' errors to be small against the odometry's systematic
+/// error, short enough to follow it (the localizers' span, the RBPF's calibration stretch).
+inline constexpr double kOdometryStretchSpan = 0.5;
+
 /// The odometry's increments since a measured pose, as the odometry measured them: what a stretch
 /// of OdometryCalibration compares with the measured motion.
 struct OdometryStretch {

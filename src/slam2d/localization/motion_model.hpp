@@ -101,8 +101,8 @@ struct MotionNoiseLearningConfig {
   double window = 100.0;  // stretches the scales average over; 0: the fixed model
   double min_scale = 0.5;
   double max_scale = 10.0;
-  double span_distance = 0.5;  // m
-  double span_angle = 0.5;     // rad
+  double span_distance = kOdometryStretchSpan;  // m
+  double span_angle = kOdometryStretchSpan;     // rad
   OdometryCalibrationConfig calibration{.window = 0.0};  // off (docs/fusion_by_uncertainty.md)
 };
 

@@ -49,10 +49,6 @@ RbpfProposalConfig scan_odometry_matching(const RbpfConfig& config) {
   return matching;
 }
 
-// A stretch of the odometry calibration ends after this many metres or radians (the localizers'
-// span, localization/motion_model.hpp).
-constexpr double kCalibrationSpan = 0.5;
-
 // Independent streams: one per (update, particle), one per update for the resampler (particle = N).
 Rng stream(std::uint64_t seed, std::size_t update, std::size_t particle) {
   return Rng(mix_seed(mix_seed(seed) ^ mix_seed((static_cast<std::uint64_t>(update) << 20) ^ particle)));
@@ -277,7 +273,7 @@ void RbpfSlam::learn_odometry_calibration(const OdometryCheck& odometry, const S
   if (usable && stretch.anchored) {
     stretch.raw.add(delta);
     stretch.odometry_covariance += scan_odometry_noise_.covariance(delta);
-    if (std::abs(stretch.raw.path) < kCalibrationSpan && std::abs(stretch.raw.turn) < kCalibrationSpan) return;
+    if (std::abs(stretch.raw.path) < kOdometryStretchSpan && std::abs(stretch.raw.turn) < kOdometryStretchSpan) return;
     const SE2 measured = stretch.anchor.between(corrected);
     const Covariance3 total = stretch.anchor_covariance + match.match_covariance + stretch.odometry_covariance;
     scan_odometry_calibration_.observe(stretch.raw.turn, stretch.raw.path, stretch.raw.displacement.translation(),
