@@ -24,14 +24,22 @@ inline JsonObject odometry_report(const OdometryGuardStats& stats) {
   return report;
 }
 
+/// The odometry noise model's learnt scales, and from how many agreements.
+inline JsonObject odometry_noise_report(const OdometryNoiseModel& noise) {
+  JsonObject report;
+  report.add("odometry_noise_scale_translation", noise.translation_scale());
+  report.add("odometry_noise_scale_rotation", noise.rotation_scale());
+  report.add("odometry_noise_observations", noise.observations());
+  return report;
+}
+
 /// How odometry and scan matching were weighed: the fusions, the disagreements and their winners,
 /// and the odometry noise model's learnt scales.
 inline JsonObject fusion_report(const MotionFusionStats& stats, const OdometryNoiseModel& noise) {
   JsonObject report;
   report.add("fusion_fused", stats.fused).add("fusion_disagreements", stats.disagreements());
   report.add("fusion_odometry_won", stats.odometry_won).add("fusion_match_won", stats.match_won);
-  report.add("odometry_noise_scale_translation", noise.translation_scale());
-  report.add("odometry_noise_scale_rotation", noise.rotation_scale());
+  report.merge(odometry_noise_report(noise));
   return report;
 }
 

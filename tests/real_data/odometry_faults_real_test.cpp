@@ -106,12 +106,17 @@ TEST(OdometryStallRealData, GraphSlamCountsNoTurnTwiceAfterAFreezeThatBeganAtRes
   EXPECT_GE(run.odometry.catch_ups, run.odometry.stalls);
 }
 
+// Without the guard the frozen increments are trusted and the stalls counted twice. The tracker's
+// prior weighed by the odometry's learnt noise (the default since 2026-12-03) softens it: ACES
+// 0.056 m against 0.081 m with the fixed prior, still well above the guarded run.
 TEST(OdometryStallRealData, WithoutTheGuardGraphSlamCountsTheStallsTwice) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<LaserMessage> scans = stalled_scans(data / "aces/aces.clf.gz");
-  const GraphRun run = run_graph(scans, read_relations((data / "aces/aces.relations").string()), false);
-  EXPECT_GT(run.error.translation.mean, 1.5 * 0.0375);  // measured 0.081 m
-  EXPECT_EQ(run.odometry.untrusted(), 0u);
+  const std::vector<Relation> relations = read_relations((data / "aces/aces.relations").string());
+  const GraphRun unguarded = run_graph(scans, relations, false);
+  const GraphRun guarded = run_graph(scans, relations, true);
+  EXPECT_GT(unguarded.error.translation.mean, 1.3 * guarded.error.translation.mean);  // measured 0.0562 m and 0.0403 m
+  EXPECT_EQ(unguarded.odometry.untrusted(), 0u);
 }
 
 // A 10 s stall every 120 s on ACES: the robot drives 4 m down a corridor at 1210 s while the
@@ -124,10 +129,10 @@ TEST(OdometryStallRealData, TenSecondStallsAreWaitedOutBeforeTheMapIsWritten) {
       stalled_scans(data / "aces/aces.clf.gz", "stall:every=120,start=60,duration=10");
   const std::vector<Relation> relations = read_relations((data / "aces/aces.relations").string());
   const GraphRun held = run_graph(scans, relations, true);
-  EXPECT_LT(held.error.translation.mean, 1.5 * 0.0375);  // measured 0.0498 m
+  EXPECT_LT(held.error.translation.mean, 1.5 * 0.0375);  // measured 0.0516 m (0.0498 m with the fixed tracker prior)
   EXPECT_GE(held.odometry.stalls, 10u);
   const GraphRun written = run_graph(scans, relations, true, /*max_held_stall=*/0.0);
-  EXPECT_GT(written.error.translation.mean, 0.5);  // measured 1.83 m
+  EXPECT_GT(written.error.translation.mean, 0.5);  // measured 1.35 m
   HectorSlam hector;
   for (const LaserMessage& laser : scans) hector.add_scan(laser.scan, HectorInputs{.T_odom_robot = laser.odom_pose});
   EXPECT_LT(relation_error(hector.trajectory(), relations).translation.mean, 0.2);  // measured 0.132 m
@@ -268,7 +273,8 @@ TEST(ReverseOdometryRealData, GraphSlamMapsFr079WithEveryOtherScanDropped) {
   CarmenReaderOptions raw;
   raw.repair_reverse_odometry = false;
   const GraphRun as_logged = run_graph(perturbed_scans(log, "decimate:k=2", raw), relations, true);
-  EXPECT_GT(as_logged.error.translation.mean, 0.2);  // measured 0.656 m
+  // Measured 0.102 m against 0.0339 m repaired (0.656 m with the tracker's fixed prior, before 2026-12-03).
+  EXPECT_GT(as_logged.error.translation.mean, 2.0 * repaired.error.translation.mean);
 }
 
 }  // namespace

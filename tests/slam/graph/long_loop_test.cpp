@@ -18,6 +18,7 @@
 #include "slam2d/sim/office_world.hpp"
 #include "slam2d/sim/simulator.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
+#include "support/graph_configs.hpp"
 
 namespace slam2d {
 namespace {
@@ -153,34 +154,65 @@ void expect_the_loop_at_the_end_of_the_log_closes(const GraphSlamConfig& config)
   EXPECT_LT(end_error(cut, run), 0.3);
 }
 
+// With the defaults (the tracker's prior weighed by the motion noise, the sequential edges from the
+// match, no odometry edges: docs/fusion_by_uncertainty.md) the drift is 1.4 m, 0.8 m of it across
+// the corridor, and the refinement of the confirming keyframe's loop match cycles between sets of
+// pairs 7 mm from the correlative pose. Before the point-to-line ICP took such a cycle for its end
+// (PoseCycle) it ran out of iterations, the match counted as failed and the loop stayed open
+// (1.34 m off).
 TEST(GraphSlamLateLoops, ALoopThatClosesAtTheEndOfTheLogCloses) { expect_the_loop_at_the_end_of_the_log_closes({}); }
 
-// The same with the tracker's prior weighed by the motion noise and the sequential edges from the
-// match, without odometry edges (docs/fusion_by_uncertainty.md, "The double count, measured"):
-// the drift is another (1.4 m, 0.8 m of it across the corridor), and the refinement of the
-// confirming keyframe's loop match cycles between sets of pairs 7 mm from the correlative pose.
-// Before the point-to-line ICP took such a cycle for its end (PoseCycle) it ran out of
-// iterations, the match counted as failed and the loop stayed open (1.34 m off).
-TEST(GraphSlamLateLoops, ALoopThatClosesAtTheEndOfTheLogClosesWithTheWeighedTrackerPrior) {
+// The same with the tracker's fixed prior, as where the odometry is Hector's (map_job), with the
+// fixed sequential covariance and odometry edges beside it (the defaults before 2026-12-03): the
+// drift is 3 m, all of it along the corridor.
+TEST(GraphSlamLateLoops, ALoopThatClosesAtTheEndOfTheLogClosesWithTheFixedTrackerPrior) {
+  expect_the_loop_at_the_end_of_the_log_closes(test::graph_with_fixed_tracker_prior());
+}
+
+// Where the laser saw nothing, only the odometry held the path: the sequential edges there carry
+// the odometry's noise (graph_slam.cpp, sequential_covariance) on top of the 2 mm floor, not the
+// floor alone, so that a loop's correction goes into the blind stretch rather than everywhere
+// alike. (This simulated odometry's noise is learnt at the model's lower bound, 0.2: its error is
+// a scale and a heading bias, which the noise model does not describe; measured 4-5 mm a keyframe.)
+TEST(GraphSlamLateLoops, TheBlindStretchsEdgesCarryTheOdometrysNoise) {
+  const BlindedLoop loop;
+  const SimulatedRun run = simulate_blinded_loop(loop);
   GraphSlamConfig config;
-  config.tracking.prior_from_motion_noise = true;
-  config.tracking.prior_kernel = {.type = RobustKernelType::kCauchy, .scale = 2.0};
-  config.sequential_from_match = true;
-  config.odometry_edges = false;
-  expect_the_loop_at_the_end_of_the_log_closes(config);
+  config.loop_closure.enabled = false;
+  const GraphSlam slam = run_graph_slam(run, config, laser_messages(run).size());
+  const double floor_information = 1.0 / (config.sequential_sigma_translation * config.sequential_sigma_translation);
+  std::size_t blind = 0;
+  std::size_t seen = 0;
+  for (const PoseGraphEdge& edge : slam.graph().edges) {
+    if (is_loop_edge(edge)) continue;
+    const double stamp = slam.keyframes()[static_cast<std::size_t>(edge.to)].stamp;
+    const double information = edge.information(0, 0);
+    if (stamp > loop.blind_from + 1.0 && stamp < loop.blind_until) {  // the first blind keyframe may still match
+      ++blind;
+      EXPECT_LT(information, floor_information / 3.0) << "blind keyframe at " << stamp << " s";
+    } else if (stamp < loop.blind_from) {
+      ++seen;
+    }
+  }
+  EXPECT_GT(blind, 20u);
+  EXPECT_GT(seen, 20u);
 }
 
 // A long loop: a blind stretch of 36 m on the far side of a 176 m lap with a heading bias of
 // 0.01 rad/m leaves more than 12 m of drift at the start (the old maximum search radius) and a
-// quarter of a radian. The robot's drift model says what such a robot can do (9 % of the
-// distance, 0.15 %/m of heading in 3 sigmas); only the global search reaches that far.
+// quarter of a radian (the odometry alone ends 28.7 m off). The robot's drift model says what such
+// a robot can do (10.5 % of the distance, 0.15 %/m of heading in 3 sigmas); only the global
+// search reaches that far. The tracker's drift at the keyframe that closes the loop is 15.8 m
+// (fixed prior) to about 16.7 m (weighed prior) over about 184 m of graph path, 8.6-9.1 %: a model of
+// 9 % held the one and refused the other at the edge (3.0 %/m per sigma refuses it, 3.1 %/m
+// closes it), so the model holds it with a margin, not at its edge.
 TEST(GraphSlamLateLoops, ALongDriftIsClosedByTheGlobalSearch) {
   const SimulatedRun run = simulate_blinded_loop(
       {.world_scale = 4.0, .duration = 175.0, .blind_from = 42.0, .blind_until = 72.0, .heading_bias = 0.01,
        .laser_range = 10.0});
   const std::size_t all = laser_messages(run).size();
   GraphSlamConfig config;
-  config.loop_closure.drift.translation_per_metre = 0.03;
+  config.loop_closure.drift.translation_per_metre = 0.035;
   config.loop_closure.drift.rotation_per_metre = 0.0005;
   GraphSlamConfig open_config = config;
   open_config.loop_closure.enabled = false;

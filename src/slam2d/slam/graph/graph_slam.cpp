@@ -24,10 +24,12 @@ constexpr double kOutvotedWeight = 1e-6;
 
 HectorSlamConfig default_tracking_config() {
   HectorSlamConfig config;
-  config.prior_information_translation = 100.0;  // 1/m^2: sigma 0.1 m
-  config.prior_information_rotation = 300.0;     // 1/rad^2: sigma 0.058 rad
-  config.prior_sigma_per_metre = 0.0;            // the same weak prior for every increment,
-  config.prior_kernel = {};                      // a plain Gaussian,
+  config.prior_from_motion_noise = true;         // the prior weighed by the odometry's learnt noise,
+  config.prior_kernel = kOdometryPriorKernel;    // under Hector's Cauchy kernel: the scan wins far off,
+  config.recovery_residual = 0.25;               // and a poor fit is retried over every heading;
+  config.prior_information_translation = 100.0;  // until a match has told the noise (and where the
+  config.prior_information_rotation = 300.0;     // odometry is Hector's: map_job), sigma 0.1 m, 0.058 rad
+  config.prior_sigma_per_metre = 0.0;            // for every increment,
   config.prior_at_catch_ups = true;              // catch-ups included (degraded acapulco: 0.43 m, 1.00 without)
   config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands
   return config;
@@ -120,7 +122,9 @@ void GraphSlam::accumulate_odometry(const HectorStep& tracked) {
 
 // The tracker's match covariance at the keyframe, twice (the previous keyframe was matched against
 // the same local map), on the floor of the sequential sigmas and inflated along a degenerate
-// direction (registration/match_fusion.hpp).
+// direction (registration/match_fusion.hpp). A scan that told nothing (no usable points: a blind
+// stretch) leaves the step to the odometry, with the odometry's own noise since the last keyframe,
+// so that a loop's correction goes where nothing but the odometry held the path.
 Covariance3 GraphSlam::sequential_covariance(const HectorStep& tracked) const {
   const double floor = config_.sequential_sigma_translation;
   const Covariance3 fixed = covariance_from_sigmas(floor, floor, config_.sequential_sigma_rotation);
@@ -131,7 +135,8 @@ Covariance3 GraphSlam::sequential_covariance(const HectorStep& tracked) const {
                                .floor_rotation = config_.sequential_sigma_rotation,
                                .degenerate_sigma = config_.degenerate_sigma};
   const MotionMeasurement measurement = match_measurement(match, noise);
-  return measurement.covariance.diagonal().maxCoeff() >= kUnknownVariance ? fixed : measurement.covariance;
+  if (measurement.covariance.diagonal().maxCoeff() < kUnknownVariance) return measurement.covariance;
+  return fixed + odometry_noise().covariance(odometry_since_keyframe_);
 }
 
 // The odometry edge beside a sequential edge: the guarded odometry's increment between the two

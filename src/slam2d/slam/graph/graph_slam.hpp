@@ -8,20 +8,23 @@
 // 1. keyframes: a scan becomes a node when the robot moved min_distance or turned min_angle since
 //    the last keyframe, or min_time passed (keyframes.hpp);
 // 2. sequential constraints: every scan is tracked against a local occupancy-grid map by
-//    Gauss-Newton on a map pyramid (Hector's matcher, slam/hector, with a weak prior at the
-//    odometry prediction); the tracked motion from the previous keyframe is the edge, with a small
-//    fixed covariance (a scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
-//    matches do, so the chain is stiff and the loop edges bend it only where it drifted); with
-//    `sequential_from_match`, the match's covariance at the new keyframe is added
-//    (registration/match_fusion.hpp: the Hessian's, twice, for the two ends matched against one
-//    local map), so that where the scan leaves a direction open the edge is loose along it. Beside it, when the scans
-//    come with odometry, an odometry edge: the guarded odometry's increment between the two
-//    keyframes, with the covariance of the odometry's motion noise model (core/motion_fusion.hpp),
-//    whose scale is learnt from how well the two edges agree; the back end weighs the two by their
-//    information. Where the two disagree beyond their joint uncertainty (core/motion_fusion.hpp),
-//    the one surer along the difference stands alone. An increment the odometry guard did not
-//    trust leaves that odometry edge out, and without odometry the sequential edge keeps the
-//    fixed covariance of the floor;
+//    Gauss-Newton on a map pyramid (Hector's matcher, slam/hector), with a prior at the odometry's
+//    prediction weighed by the odometry's own uncertainty (its motion noise model, whose scale the
+//    tracker learns from how well the matches agree with it) under a Cauchy kernel, so that the
+//    scan carries the step where it is sure and the odometry where the scan says little (glass,
+//    noise, a corridor); the tracked motion from the previous keyframe is the edge. Its covariance
+//    is the match's at the new keyframe (`sequential_from_match`; registration/match_fusion.hpp:
+//    the Hessian's, twice, for the two ends matched against one local map, on a small floor,
+//    inflated along a degenerate direction), which holds the odometry's information through the
+//    prior, once. A scan-to-map match does not drift from keyframe to keyframe as scan-to-scan
+//    matches do, so the chain is stiff and the loop edges bend it only where it drifted. With
+//    `odometry_edges` (off by default: with the weighed prior they count the odometry twice), an
+//    odometry edge beside it: the guarded odometry's increment between the two keyframes, with the
+//    covariance of the odometry's motion noise model (core/motion_fusion.hpp), whose scale is
+//    learnt from how well the two edges agree; where the two disagree beyond their joint
+//    uncertainty, the one surer along the difference stands alone. An increment the odometry guard
+//    did not trust leaves that odometry edge out, and without odometry the sequential edge keeps
+//    the fixed covariance of the floor;
 // 3. loop closure: earlier keyframes near the pose estimate, grouped in chains, each chain's
 //    local map searched over a large window by branch-and-bound, accepted above a response
 //    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
@@ -62,9 +65,14 @@
 
 namespace slam2d {
 
-/// The tracker's configuration: Hector's, with a weak Gaussian prior at the motion prediction
-/// (sigma 0.1 m and 0.058 rad) and solution remapping (HectorMatcherConfig::degeneracy_ratio
-/// 0.01), which keep the directions a scan leaves open (a corridor's axis) at the odometry.
+/// The tracker's configuration: Hector's, with a prior at the odometry's prediction weighed by the
+/// odometry's own uncertainty (HectorSlamConfig::prior_from_motion_noise: the prediction's
+/// covariance from the motion noise model whose scale the tracker learns from how the matches
+/// agree with the odometry) under a Cauchy kernel, a retry over every heading after a poor fit
+/// (recovery_residual 0.25, as without odometry), and solution remapping
+/// (HectorMatcherConfig::degeneracy_ratio 0.01), which keeps the directions a scan leaves open (a
+/// corridor's axis) at the odometry. Until the first match, and where the odometry is not a sensor
+/// of its own (Hector's poses: map_job), the prior is the fixed weak one (sigma 0.1 m, 0.058 rad).
 HectorSlamConfig default_tracking_config();
 
 struct GraphSlamConfig {
@@ -78,11 +86,12 @@ struct GraphSlamConfig {
   double sequential_sigma_translation = 0.002;  // the sequential edge's floor
   double sequential_sigma_rotation = 0.001;
   // The tracker's match covariance on top of the floor (false: the floor alone, a fixed covariance).
-  // Off by default: it helps under laser faults but costs ACES with 10 s odometry stalls
-  // (docs/fusion_by_uncertainty.md).
-  bool sequential_from_match = false;
+  // With the tracker's weighed prior that covariance holds the odometry's information once, so the
+  // odometry edges are off by default: beside it they would count the odometry twice
+  // (docs/fusion_by_uncertainty.md, "The tracker's prior weighed by the motion noise").
+  bool sequential_from_match = true;
   double degenerate_sigma = 1.0;  // m (rad) added along a degenerate match's weak direction
-  bool odometry_edges = true;
+  bool odometry_edges = false;
   OdometryNoiseConfig odometry_noise{};
   LoopClosureConfig loop_closure{};
   SparsePoseAdjustmentConfig back_end{.loop_kernel = {.type = RobustKernelType::kCauchy, .scale = 3.0}};
@@ -167,7 +176,11 @@ class GraphSlam {
   /// What the tracker's odometry guard found (empty before the first scan or without odometry).
   OdometryGuardStats odometry_stats() const { return tracker_ ? tracker_->odometry_stats() : OdometryGuardStats{}; }
   const GraphSlamConfig& config() const { return config_; }
-  const OdometryNoiseModel& odometry_noise() const { return odometry_noise_; }
+  /// The learnt noise model that weighs the odometry: the odometry edges' when they are on, else
+  /// the tracker's, whose prior it weighs.
+  const OdometryNoiseModel& odometry_noise() const {
+    return config_.odometry_edges || !tracker_ ? odometry_noise_ : tracker_->odometry_noise();
+  }
 
  private:
   struct ScanRecord {
