@@ -239,7 +239,12 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
-    if (config.fuse_odometry) run.method_summary.merge(fusion_report(slam.fusion_stats(), slam.odometry_noise()));
+    if (config.fuse_odometry) {
+      run.method_summary.merge(fusion_report(slam.fusion_stats(), slam.odometry_noise()));
+    } else if (config.prior_from_motion_noise) {
+      run.method_summary.merge(odometry_noise_report(slam.odometry_noise()));
+    }
+    if (slam.calibrating()) run.method_summary.merge(calibration_report(slam.odometry_calibration()));
   }
   return run;
 }
@@ -283,6 +288,9 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
       run.method_summary.merge(fusion_report(stats.fusion, slam.odometry_noise()));
     } else if (config.tracking.prior_from_motion_noise) {
       run.method_summary.merge(odometry_noise_report(slam.odometry_noise()));
+    }
+    if (const OdometryCalibration* calibration = slam.odometry_calibration()) {
+      run.method_summary.merge(calibration_report(*calibration));
     }
   }
   return run;

@@ -50,6 +50,7 @@ inline JsonObject calibration_report(const OdometryCalibration& calibration) {
   report.add("odometry_calibration_translation_scale", calibration.translation_scale());
   report.add("odometry_calibration_rotation_scale", calibration.rotation_scale());
   report.add("odometry_calibration_drift_rad_per_m", calibration.drift_per_metre());
+  report.add("odometry_calibration_credible", calibration.credible());
   return report;
 }
 

@@ -69,23 +69,27 @@ void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2
   const double keep = 1.0 - 1.0 / std::max(config_.window, 1.0);
   const double prior = 1.0 / (config_.prior_sigma * config_.prior_sigma);
   // Rotation: true turn = scale * odometry turn + drift * path. The residual is regressed on the
-  // measured turn, not on the odometry's: the odometry's noise is in the residual, and a regressor
-  // carrying it too would shrink the scale towards the noise (errors in variables). So
-  // measured - odometry = a * measured + b * path, with scale = 1 / (1 - a), drift = b / (1 - a).
-  const Eigen::Vector2d h(measured_rotation, path);
+  // measured motion, not on the odometry's: the odometry's noise is in the residual, and a
+  // regressor carrying it too would shrink the estimates towards zero (errors in variables). So
+  // measured - odometry = a * measured turn + b * measured length (signed as the path; the chord
+  // of a stretch this short is its path), with scale = 1 / (1 - a) and drift = b / (1 - a) per
+  // metre measured, the translation scale times that per metre of the odometry's.
+  const Eigen::Vector2d h(measured_rotation, std::copysign(measured_displacement.norm(), path));
   const double e = normalize_angle(measured_rotation - turn);
   const double w = robust_weight(e - h.dot(rotation_), rotation_variance) / rotation_variance;
   rotation_information_ = keep * rotation_information_ + w * h * h.transpose();
   rotation_vector_ = keep * rotation_vector_ + w * e * h;
   rotation_ = (rotation_information_ + prior * Eigen::Matrix2d::Identity()).ldlt().solve(rotation_vector_);
-  // Translation: the measured displacement along the odometry's, m = scale * the odometry's length;
-  // m - length = c * m, scale = 1 / (1 - c).
-  const double length = displacement.norm();
-  if (length < config_.min_distance) return;
-  const double along = measured_displacement.dot(displacement) / length;
-  const double wt = robust_weight(along - length - along * translation_, translation_variance) / translation_variance;
-  translation_information_ = keep * translation_information_ + wt * along * along;
-  translation_vector_ = keep * translation_vector_ + wt * (along - length) * along;
+  // Translation: the measured length m = scale * the odometry's displacement along the measured
+  // one, l; m - l = c * m, scale = 1 / (1 - c). Along the measured direction, not the odometry's
+  // length: a jitter of the odometry across its path would lengthen that, never shorten it.
+  const double measured_length = measured_displacement.norm();
+  if (measured_length < config_.min_distance) return;
+  const double along = displacement.dot(measured_displacement) / measured_length;
+  const double et = measured_length - along;
+  const double wt = robust_weight(et - measured_length * translation_, translation_variance) / translation_variance;
+  translation_information_ = keep * translation_information_ + wt * measured_length * measured_length;
+  translation_vector_ = keep * translation_vector_ + wt * et * measured_length;
   translation_ = translation_vector_ / (translation_information_ + prior);
 }
 
@@ -98,7 +102,8 @@ double OdometryCalibration::rotation_scale() const {
 }
 
 double OdometryCalibration::drift_per_metre() const {
-  return std::clamp(rotation_.y() / (1.0 - rotation_.x()), -config_.max_correction, config_.max_correction);
+  return std::clamp(translation_scale() * rotation_.y() / (1.0 - rotation_.x()), -config_.max_correction,
+                    config_.max_correction);
 }
 
 namespace {
@@ -111,7 +116,20 @@ double signed_distance(const SE2& increment) {
 
 }  // namespace
 
+// Within the bounds believed on all three: a fit beyond them is not a wheel odometry's systematic
+// error (a time-shifted or interpolated odometry's errors are heavy-tailed, and a forgetting fit
+// follows them to any value), so nothing is corrected while it lasts.
+bool OdometryCalibration::credible() const {
+  if (!(translation_ < 1.0) || !(rotation_.x() < 1.0)) return false;
+  const double translation = 1.0 / (1.0 - translation_);
+  const double rotation = 1.0 / (1.0 - rotation_.x());
+  const double drift = translation * rotation * rotation_.y();
+  const double bound = config_.max_correction;
+  return std::abs(translation - 1.0) <= bound && std::abs(rotation - 1.0) <= bound && std::abs(drift) <= bound;
+}
+
 SE2 OdometryCalibration::corrected(const SE2& increment) const {
+  if (!credible()) return increment;
   const double extra = (rotation_scale() - 1.0) * increment.theta() + drift_per_metre() * signed_distance(increment);
   // The chord of an arc turns by half the arc's turn.
   const Eigen::Vector2d t = Eigen::Rotation2Dd(0.5 * extra) * (translation_scale() * increment.translation());
@@ -122,6 +140,24 @@ void OdometryStretch::add(const SE2& increment) {
   displacement = displacement * increment;
   turn += increment.theta();
   path += signed_distance(increment);
+}
+
+void CalibrationStretches::add(bool usable, const SE2& increment, const Covariance3& increment_noise, const SE2& measured,
+                               const Covariance3& measured_covariance, OdometryCalibration& calibration) {
+  if (usable && anchored_) {
+    raw_.add(increment);
+    odometry_covariance_ += increment_noise;
+    const SE2 motion = anchor_.between(measured);
+    if (motion.translation().norm() < kOdometryStretchSpan && std::abs(motion.theta()) < kOdometryStretchSpan) return;
+    const Covariance3 total = anchor_covariance_ + measured_covariance + odometry_covariance_;
+    calibration.observe(raw_.turn, raw_.path, raw_.displacement.translation(), motion.theta(), motion.translation(),
+                        total(2, 2), planar_variance(total));
+  }
+  *this = CalibrationStretches{};
+  if (!usable) return;
+  anchored_ = true;
+  anchor_ = measured;
+  anchor_covariance_ = measured_covariance;
 }
 
 OdometryNoiseModel::OdometryNoiseModel(const OdometryNoiseConfig& config)

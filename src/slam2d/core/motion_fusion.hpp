@@ -91,18 +91,20 @@ class NoiseScaleEstimate {
 /// only noisy lags behind it (the Intel log's odometry turns 0.057 rad per metre it drives: the
 /// EKF's heading ran 0.009 rad behind the map's on average). Over stretches measured at both ends
 /// (scan matches against a map), the rotation residual (measured minus odometry) is regressed on
-/// the turn and the odometry's path length, and the along-track residual on the distance,
-/// by weighted recursive least squares forgetting over `window` stretches (each against the
-/// measured motion, not the odometry's, whose noise would bias the scales), with a ridge prior of
+/// the measured turn and length, and the residual of the odometry's displacement along the
+/// measured one on the measured length, by weighted recursive least squares forgetting over
+/// `window` stretches (every regressor the measured motion, never the odometry's, whose noise
+/// would bias the estimates: errors in variables), with a ridge prior of
 /// prior_sigma at zero (an online self-calibration in the spirit of N. Roy and S. Thrun, "Online
 /// self-calibration for mobile robots", ICRA 1999, in linear form). A stretch whose residual lies
 /// beyond 3 sigma of the current fit weighs (3 sigma / residual)^2 as much (a slip, a wrong match).
 /// Corrected: distance times translation_scale, turn times rotation_scale plus
-/// drift_per_metre times the distance.
+/// drift_per_metre times the distance; nothing while the fit lies beyond max_correction on any of
+/// the three (credible()), which no wheel odometry's systematic error reaches.
 struct OdometryCalibrationConfig {
   double window = 100.0;        // stretches the estimate forgets over; 0: no correction
   double prior_sigma = 0.05;    // 1 and rad/m, the ridge prior of each parameter at zero
-  double max_correction = 0.2;  // 1 and rad/m, the largest scale error and drift believed
+  double max_correction = 0.2;  // 1 and rad/m, the largest scale error and drift believed (beyond: none corrected)
   double min_distance = 0.2;    // m, shorter displacements teach no translation scale
 };
 
@@ -110,7 +112,8 @@ template <typename Fields>
 void describe(Fields& f, OdometryCalibrationConfig& c) {
   f.number("window", c.window, "1", at_least(0), "stretches the odometry's systematic error is estimated over (0: not corrected)");
   f.number("prior_sigma", c.prior_sigma, "1", greater_than(0), "prior standard deviation of each error (scales, and drift in rad/m) at zero");
-  f.number("max_correction", c.max_correction, "1", between(0, 0.5), "largest scale error, and drift in rad/m, believed");
+  f.number("max_correction", c.max_correction, "1", between(0, 0.5),
+           "largest scale error, and drift in rad/m, believed; a fit beyond it on any of the three corrects nothing");
   f.number("min_distance", c.min_distance, "m", greater_than(0), "stretches that move less teach no translation scale");
 }
 
@@ -130,12 +133,16 @@ class OdometryCalibration {
   double drift_per_metre() const;    // rad per metre of the odometry's (signed) path
   std::size_t observations() const { return observations_; }
 
-  /// The odometry's increment (T_previous_current) corrected for the error learnt so far.
+  /// The fit lies within max_correction on all three (the accessors above clamp to it).
+  bool credible() const;
+  /// The odometry's increment (T_previous_current) corrected for the error learnt so far; as it
+  /// is while the fit is not credible().
   SE2 corrected(const SE2& increment) const;
 
  private:
   OdometryCalibrationConfig config_;
-  // Forgetting normal equations: rotation on (turn, path), translation on distance.
+  // Forgetting normal equations: rotation on (measured turn, measured length), translation on
+  // the measured length.
   Eigen::Matrix2d rotation_information_ = Eigen::Matrix2d::Zero();
   Eigen::Vector2d rotation_vector_ = Eigen::Vector2d::Zero();
   double translation_information_ = 0.0;
@@ -158,6 +165,27 @@ struct OdometryStretch {
   double path = 0.0;  // their signed path length, m (backwards negative)
 
   void add(const SE2& increment);
+};
+
+/// A tracker's stretches of OdometryCalibration: from the measured pose at a matched scan to the
+/// first later one kOdometryStretchSpan of measured travel or turn away (the measured motion, not
+/// the odometry's: ended on the odometry's, the jitter of an odometry would select the stretches),
+/// every increment between them trusted by the guard and matched. The measured motion's uncertainty is the two matches' and the odometry
+/// noise of the increments between them. A scan that is not usable (its increment not trusted,
+/// no match) ends the stretch unlearnt.
+class CalibrationStretches {
+ public:
+  /// One scan: the odometry's raw increment from the previous scan and the noise the model gives
+  /// it, the scan's measured pose and that match's covariance.
+  void add(bool usable, const SE2& increment, const Covariance3& increment_noise, const SE2& measured,
+           const Covariance3& measured_covariance, OdometryCalibration& calibration);
+
+ private:
+  bool anchored_ = false;
+  SE2 anchor_;                                              // measured pose the stretch starts at
+  Covariance3 anchor_covariance_ = Covariance3::Zero();     // that match's covariance
+  OdometryStretch raw_;                                     // the odometry's increments since
+  Covariance3 odometry_covariance_ = Covariance3::Zero();   // their noise, summed
 };
 
 /// The odometry's motion noise with its online scales (translation and rotation).

@@ -181,6 +181,11 @@ class GraphSlam {
   const OdometryNoiseModel& odometry_noise() const {
     return config_.odometry_edges || !tracker_ ? odometry_noise_ : tracker_->odometry_noise();
   }
+  /// The odometry's systematic error the tracker learnt; null where it does not
+  /// (tracking.odometry_calibration off, or no scan yet).
+  const OdometryCalibration* odometry_calibration() const {
+    return tracker_ && tracker_->calibrating() ? &tracker_->odometry_calibration() : nullptr;
+  }
 
  private:
   struct ScanRecord {

@@ -50,7 +50,8 @@ HectorSlam::HectorSlam(const HectorSlamConfig& config)
     : config_(config),
       odometry_guard_(config.odometry_guard),
       map_(map_config(config)),
-      odometry_noise_(config.odometry_noise) {
+      odometry_noise_(config.odometry_noise),
+      odometry_calibration_(config.odometry_calibration) {
   validate(config_);
   free_matcher_ = config_.matcher;
   free_matcher_.rotation_search_range = config_.rotation_search_without_odometry;
@@ -109,11 +110,17 @@ void HectorSlam::fuse(HectorStep& step) {
   if (known) step.covariance = match.covariance;
   residual_variance_ = step.match.residual * step.match.residual;
   const bool learns = config_.fuse_odometry || config_.prior_from_motion_noise;
-  if (!learns || config_.prior != MotionPrior::kOdometry || !odometry_.trusted() || !known) return;
+  const bool usable = learns && config_.prior == MotionPrior::kOdometry && odometry_.trusted() && known;
+  if (calibrating()) {
+    calibration_stretches_.add(usable, odometry_.increment, odometry_noise_.covariance(odometry_.increment), match.value,
+                               match.covariance, odometry_calibration_);
+  }
+  if (!usable) return;
   const Covariance3 predicted = predicted_covariance();
   // The odometry's noise is learnt from the match's motion since the last pose, whose uncertainty
-  // is the two poses' (the last one's already counted in the prediction).
-  odometry_noise_.observe(odometry_.increment, last_pose_->between(match.value),
+  // is the two poses' (the last one's already counted in the prediction); what the calibration
+  // corrects is not noise.
+  odometry_noise_.observe(odometry_increment(), last_pose_->between(match.value),
                           rotate_covariance(last_covariance_ + match.covariance, -last_pose_->theta()));
   if (!config_.fuse_odometry) return;
   const FusedMotion fused =
@@ -194,7 +201,13 @@ std::optional<HectorSlam::UntrustedStarts> HectorSlam::untrusted_starts() const 
 // The odometry prediction's covariance in the map: the last pose's plus the motion noise of this
 // scan's increment (the learnt model's), turned into the map frame.
 Covariance3 HectorSlam::predicted_covariance() const {
-  return last_covariance_ + rotate_covariance(odometry_noise_.covariance(odometry_.increment), last_pose_->theta());
+  return last_covariance_ + rotate_covariance(odometry_noise_.covariance(odometry_increment()), last_pose_->theta());
+}
+
+// This scan's odometry increment, corrected for the systematic error learnt so far where it is
+// trusted and calibrating().
+SE2 HectorSlam::odometry_increment() const {
+  return calibrating() && odometry_.trusted() ? odometry_calibration_.corrected(odometry_.increment) : odometry_.increment;
 }
 
 // The Gaussian prior at the odometry prediction; none without odometry or where the guard did not
@@ -220,7 +233,7 @@ SE2 HectorSlam::predict(const LaserScan& scan) const {
   if (!last_pose_) return SE2::identity();
   switch (config_.prior) {
     case MotionPrior::kOdometry:
-      if (odometry_.trusted()) return *last_pose_ * odometry_.increment;
+      if (odometry_.trusted()) return *last_pose_ * odometry_increment();
       return untrusted_starts()->first;
     case MotionPrior::kConstantVelocity: {
       const double dt = scan.stamp - last_stamp_;

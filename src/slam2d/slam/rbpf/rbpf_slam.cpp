@@ -262,29 +262,12 @@ void RbpfSlam::learn_odometry_noise(const OdometryCheck& odometry, const SE2& de
 }
 
 // The odometry's systematic error learnt over stretches of the scan-matched odometry (whose
-// motion between two matched scans is the measurement; its uncertainty the two matches' and the
-// odometry noise of the increments between them). A scan whose increment the guard did not trust,
-// or that did not match, ends the stretch unlearnt.
+// motion between two matched scans is the measurement: CalibrationStretches).
 void RbpfSlam::learn_odometry_calibration(const OdometryCheck& odometry, const SE2& delta, const ProposalResult& match,
                                           const SE2& corrected) {
   if (!calibrating()) return;
-  CalibrationStretch& stretch = calibration_stretch_;
-  const bool usable = odometry.trusted() && match.matched;
-  if (usable && stretch.anchored) {
-    stretch.raw.add(delta);
-    stretch.odometry_covariance += scan_odometry_noise_.covariance(delta);
-    if (std::abs(stretch.raw.path) < kOdometryStretchSpan && std::abs(stretch.raw.turn) < kOdometryStretchSpan) return;
-    const SE2 measured = stretch.anchor.between(corrected);
-    const Covariance3 total = stretch.anchor_covariance + match.match_covariance + stretch.odometry_covariance;
-    scan_odometry_calibration_.observe(stretch.raw.turn, stretch.raw.path, stretch.raw.displacement.translation(),
-                                       measured.theta(), measured.translation(), total(2, 2),
-                                       planar_variance(total));
-  }
-  stretch = CalibrationStretch{};
-  if (!usable) return;
-  stretch.anchored = true;
-  stretch.anchor = corrected;
-  stretch.anchor_covariance = match.match_covariance;
+  calibration_stretches_.add(odometry.trusted() && match.matched, delta, scan_odometry_noise_.covariance(delta), corrected,
+                             match.match_covariance, scan_odometry_calibration_);
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {

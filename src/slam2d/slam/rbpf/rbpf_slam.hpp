@@ -245,16 +245,6 @@ class RbpfSlam {
     return config_.scan_odometry_prior_from_motion_noise && config_.scan_odometry_calibration.window > 0.0;
   }
 
-  // A stretch of OdometryCalibration: from the scan-matched odometry pose at a matched scan to a
-  // later one, every increment between them trusted and matched.
-  struct CalibrationStretch {
-    bool anchored = false;
-    SE2 anchor;                      // scan-matched odometry pose it starts at
-    Covariance3 anchor_covariance = Covariance3::Zero();  // that scan's match covariance
-    OdometryStretch raw;             // the wheel odometry's increments since
-    Covariance3 odometry_covariance = Covariance3::Zero();  // their noise (the learnt model's), summed
-  };
-
   RbpfConfig config_;
   std::shared_ptr<RbpfWorkers> workers_;  // null when serial (threads resolve to 1)
   OdometryGuard odometry_guard_;
@@ -262,7 +252,7 @@ class RbpfSlam {
   OdometryNoiseModel scan_odometry_noise_;  // config.scan_odometry_prior_from_motion_noise
   Covariance3 last_match_covariance_ = unknown_covariance();  // of the previous scan's match
   OdometryCalibration scan_odometry_calibration_;  // calibrating()
-  CalibrationStretch calibration_stretch_;
+  CalibrationStretches calibration_stretches_;
   SE2 last_moved_corrected_;     // ... at the last scan whose wheel-odometry pose moved
   std::vector<RbpfParticle> particles_;
   std::vector<ScanRecord> scans_;
