@@ -123,7 +123,7 @@ struct HectorSlamConfig {
   // way every metre (Intel's, 0.06 rad/m) pulls the match along its drift. Off by default: on
   // graph SLAM's tracker over 1000 stretches it lowers Intel (0.0198 -> 0.0179 m), FR079 (0.0394
   // -> 0.0380 m) and the eight corrected logs with their degraded odometry (ATE -19 %, RPE -13 %
-  // in the geometric mean), but ACES, whose odometry has nothing to correct, loses a loop in two
+  // in the geometric mean), but ACES, whose odometry has little to correct, loses a loop in two
   // runs of four (0.0381 -> 0.0413 m clean); over 100 stretches the fit follows the heavy-tailed
   // errors of an odometry shifted in time (Intel 0.3 s ahead 0.06 -> 1.2 m):
   // docs/fusion_by_uncertainty.md, "The odometry's systematic error in the tracker".
