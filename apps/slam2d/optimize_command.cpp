@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // slam2d optimize GRAPH --out OUT: sparse pose adjustment (Konolige et al. 2010,
 // src/slam2d/optim/sparse_pose_adjustment.hpp) of a g2o or TORO pose graph from its own initial
-// guess; the output format follows OUT's extension (.g2o or .graph, optionally .gz).
+// guess or from an estimate of the edges alone (optim/initial_guess.hpp), whichever scores the
+// lower chi2 (--initial); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 
 #include "commands.hpp"
@@ -22,6 +25,7 @@ struct OptimizeOptions {
   std::string graph;
   std::string out;
   int max_iterations = SparsePoseAdjustmentConfig{}.max_iterations;
+  InitialGuessChoice initial = InitialGuessChoice::kBetter;
   bool json = false;
   bool quiet = false;
 };
@@ -46,7 +50,8 @@ void run_optimize(const OptimizeOptions& options) {
   PoseGraph graph = to_pose_graph(file);
 
   const RunClock clock;
-  const SparsePoseAdjustmentResult result = optimize_pose_graph(graph, config);
+  const StartedOptimization started = optimize_pose_graph(graph, config, options.initial);
+  const SparsePoseAdjustmentResult& result = started.result;
   const double cpu = clock.cpu_seconds();
   const double wall = clock.wall_seconds();
 
@@ -62,6 +67,8 @@ void run_optimize(const OptimizeOptions& options) {
   JsonObject summary;
   summary.add("input", options.graph).add("format", format_name(file.format));
   summary.add("nodes", graph.size()).add("edges", graph.edges.size());
+  summary.add("initial_guess", std::string(choice_name(started.start))).add("given_chi2", started.given_chi2);
+  if (!std::isnan(started.estimate_chi2)) summary.add("estimated_start_chi2", started.estimate_chi2);
   summary.add("initial_chi2", result.initial_chi2).add("final_chi2", result.final_chi2);
   summary.add("iterations", result.iterations).add("converged", result.converged);
   summary.add("cpu_s", cpu).add("wall_s", wall).add("output", options.out);
@@ -79,6 +86,14 @@ void add_optimize_command(CLI::App& app) {
       ->required();
   command->add_option("--max-iterations", options->max_iterations, "Levenberg-Marquardt iterations (accepted and rejected steps)")
       ->capture_default_str();
+  std::map<std::string, InitialGuessChoice> initial;
+  for (const auto& choice : choices(InitialGuessChoice{})) initial.emplace(choice.name, choice.value);
+  command->add_option("--initial", options->initial,
+                      "Where to start: the file's poses (given), the odometry chain's spanning tree (tree), headings then "
+                      "positions by linear least squares (orientations), the one of the file's and the orientations' "
+                      "poses with the lower chi2 (better), or each of these two, keeping the lower final chi2 (both)")
+      ->transform(CLI::CheckedTransformer(initial))
+      ->default_str("better");
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line (the optimisation prints none)");
   command->callback([options] { run_optimize(*options); });

@@ -161,6 +161,35 @@ TEST(PoseGraph, EdgesOnlyFilesComposePosesAlongTheEdges) {
   EXPECT_EQ(file.edges[1].to, 11);
 }
 
+// The start of an optimisation: the odometry chain composed from the fixed node, a loop edge (here
+// a false one) only where the chain breaks, and a part no edge joins to a fixed node left alone.
+TEST(PoseGraph, TheSpanningTreeFollowsTheOdometryChain) {
+  PoseGraph graph;
+  graph.poses.assign(7, SE2(9, 9, 1));  // a guess far from anything
+  graph.poses[0] = SE2(1, 2, 0.5);      // the fixed node keeps its pose
+  const SE2 step(1, 0, 0.1);
+  for (int i = 0; i + 1 < 4; ++i) graph.edges.push_back(make_edge(i, i + 1, step));
+  graph.edges.push_back(make_edge(0, 3, SE2(-5, 0, 0)));  // a false loop edge to a node the chain reaches
+  graph.edges.push_back(make_edge(4, 1, SE2(0, 2, 0)));   // the only edge to node 4: it bridges a break
+  graph.edges.push_back(make_edge(5, 6, step));           // nodes 5 and 6: joined to nothing fixed
+  const PoseGraph tree = with_spanning_tree_poses(graph);
+  SE2 expected = graph.poses[0];
+  for (int i = 1; i < 4; ++i) {
+    expected = expected * step;
+    EXPECT_TRUE(test::poses_near(tree.poses[i], expected, 1e-12, 1e-12)) << i;
+  }
+  EXPECT_TRUE(test::poses_near(tree.poses[0], graph.poses[0], 0.0, 0.0));
+  EXPECT_TRUE(test::poses_near(tree.poses[4], tree.poses[1] * SE2(0, 2, 0).inverse(), 1e-12, 1e-12));
+  EXPECT_TRUE(test::poses_near(tree.poses[5], graph.poses[5], 0.0, 0.0));
+  EXPECT_TRUE(test::poses_near(tree.poses[6], graph.poses[6], 0.0, 0.0));
+  EXPECT_EQ(tree.edges.size(), graph.edges.size());
+  // Every tree edge holds exactly; the false loop edge does not.
+  for (const std::size_t k : {0u, 1u, 2u, 4u}) {
+    EXPECT_NEAR(edge_error(tree.edges[k], tree.poses[tree.edges[k].from], tree.poses[tree.edges[k].to]).norm(), 0.0, 1e-12);
+  }
+  EXPECT_GT(edge_error(tree.edges[3], tree.poses[0], tree.poses[3]).norm(), 5.0);
+}
+
 TEST(PoseGraph, MissingVerticesGrowFromTheKnownOnes) {
   TempDir dir;
   const std::string path = dir.file("partial.graph");

@@ -6,7 +6,8 @@
 #include "slam2d/optim/pose_graph.hpp"
 
 #include <cmath>
-#include <deque>
+#include <limits>
+#include <queue>
 #include <string>
 #include <unordered_map>
 
@@ -38,44 +39,56 @@ std::vector<int> node_ids(const PoseGraphFile& file, std::unordered_map<int, int
   return ids;
 }
 
-// Initial poses of the nodes without a vertex, composed breadth first along the edges from the
-// nodes with one (or, in an edges-only file, from the first fixed node or else the first node,
-// at the origin).
-void compose_missing_poses(const PoseGraphFile& file, PoseGraph& graph, std::vector<bool> known) {
+// The poses of the nodes not `known`, composed along the edges from the known ones (or, where
+// none is known, from the first fixed node, else the first node, at its pose): a shortest-path
+// tree (Dijkstra) that takes as few loop edges as it can, then as few edges. The odometry chain
+// (edges between consecutive nodes) is what a graph is built along; a loop edge, possibly false,
+// carries a pose only where the chain breaks. Returns the flags of the nodes reached.
+std::vector<bool> compose_along_tree(PoseGraph& graph, std::vector<bool> known) {
   const std::size_t n = graph.size();
   std::vector<std::vector<int>> incident(n);  // edge indices by node
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     incident[graph.edges[k].from].push_back(static_cast<int>(k));
     incident[graph.edges[k].to].push_back(static_cast<int>(k));
   }
-  std::deque<int> queue;
+  const auto cost = [n](const PoseGraphEdge& edge) {
+    return std::abs(edge.to - edge.from) == 1 ? 1.0 : static_cast<double>(n);
+  };
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  std::vector<double> distance(n, std::numeric_limits<double>::infinity());
   for (std::size_t node = 0; node < n; ++node) {
-    if (known[node]) queue.push_back(static_cast<int>(node));
+    if (known[node]) queue.emplace(distance[node] = 0.0, static_cast<int>(node));
   }
   if (queue.empty() && n > 0) {
-    int root = 0;
-    for (std::size_t node = 0; node < n; ++node) {
-      if (graph.is_fixed(node)) {
-        root = static_cast<int>(node);
-        break;
-      }
-    }
-    known[root] = true;
-    queue.push_back(root);
+    std::size_t root = 0;
+    while (root + 1 < n && !graph.is_fixed(root)) ++root;
+    if (!graph.is_fixed(root)) root = 0;
+    queue.emplace(distance[root] = 0.0, static_cast<int>(root));
   }
   while (!queue.empty()) {
-    const int node = queue.front();
-    queue.pop_front();
+    const auto [reached, node] = queue.top();
+    queue.pop();
+    if (reached > distance[node]) continue;  // a stale entry
+    known[node] = true;
     for (int k : incident[node]) {
       const PoseGraphEdge& edge = graph.edges[k];
       const int other = edge.from == node ? edge.to : edge.from;
-      if (known[other]) continue;
+      const double through = reached + cost(edge);
+      if (known[other] || through >= distance[other]) continue;
+      distance[other] = through;
       graph.poses[other] = edge.from == node ? graph.poses[node] * edge.T_from_to
                                              : graph.poses[node] * edge.T_from_to.inverse();
-      known[other] = true;
-      queue.push_back(other);
+      queue.emplace(through, other);
     }
   }
+  return known;
+}
+
+// Initial poses of the nodes without a vertex, composed along the edges from the nodes with one
+// (or, in an edges-only file, from the first fixed node or else the first node, at the origin).
+void compose_missing_poses(const PoseGraphFile& file, PoseGraph& graph, std::vector<bool> known) {
+  known = compose_along_tree(graph, std::move(known));
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     const PoseGraphEdge& edge = graph.edges[k];
     if (known[edge.from] && known[edge.to]) continue;
@@ -154,6 +167,20 @@ PoseGraph to_pose_graph(const PoseGraphFile& file) {
   }
   if (file.vertices.size() < ids.size()) compose_missing_poses(file, graph, std::move(known));
   return graph;
+}
+
+PoseGraph with_spanning_tree_poses(const PoseGraph& graph, std::vector<bool>* reached_nodes) {
+  PoseGraph tree = graph;
+  std::vector<bool> roots(graph.size(), false);
+  for (std::size_t node = 0; node < graph.size(); ++node) roots[node] = graph.fixed.empty() ? node == 0 : graph.fixed[node];
+  const std::vector<bool> reached = compose_along_tree(tree, std::move(roots));
+  // A part of the graph that no edge joins to a fixed node keeps its own poses: composing it from
+  // one of its nodes would only move it as a whole, which no edge measures.
+  for (std::size_t node = 0; node < graph.size(); ++node) {
+    if (!reached[node]) tree.poses[node] = graph.poses[node];
+  }
+  if (reached_nodes) *reached_nodes = reached;
+  return tree;
 }
 
 PoseGraphFile to_pose_graph_file(const PoseGraph& graph, const PoseGraphFile& original) {

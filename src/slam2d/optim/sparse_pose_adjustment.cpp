@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/optim/initial_guess.hpp"
 
 namespace slam2d {
 
@@ -405,6 +406,37 @@ SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
 SparsePoseAdjustmentResult optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config) {
   SparsePoseAdjustment spa(config);
   return spa.optimize(graph);
+}
+
+StartedOptimization optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config,
+                                        InitialGuessChoice initial) {
+  StartedOptimization started;
+  started.given_chi2 = chi2(graph);
+  if (initial == InitialGuessChoice::kGiven) {
+    started.result = optimize_pose_graph(graph, config);
+    return started;
+  }
+  const bool from_tree = initial == InitialGuessChoice::kSpanningTree;
+  PoseGraph start = from_tree ? with_spanning_tree_poses(graph) : with_orientations_first_poses(graph);
+  started.estimate_chi2 = chi2(start);
+  started.start = from_tree ? InitialGuessChoice::kSpanningTree : InitialGuessChoice::kOrientationsFirst;
+  if (initial == InitialGuessChoice::kBetter && !(started.estimate_chi2 < started.given_chi2)) {
+    started.start = InitialGuessChoice::kGiven;
+    started.result = optimize_pose_graph(graph, config);
+    return started;
+  }
+  started.result = optimize_pose_graph(start, config);
+  if (initial == InitialGuessChoice::kBoth) {
+    const SparsePoseAdjustmentResult given = optimize_pose_graph(graph, config);
+    const double seconds = started.result.seconds + given.seconds;
+    if (given.final_chi2 <= started.result.final_chi2) {
+      started.result = given;
+      started.start = InitialGuessChoice::kGiven;
+    }
+    started.result.seconds = seconds;
+  }
+  if (started.start != InitialGuessChoice::kGiven) graph.poses = std::move(start.poses);
+  return started;
 }
 
 }  // namespace slam2d

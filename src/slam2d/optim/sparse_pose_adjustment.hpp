@@ -15,6 +15,7 @@
 // optimisations after each loop closure of a SLAM run cost little.
 
 #include <cstddef>
+#include <limits>
 #include <memory>
 
 #include "slam2d/optim/pose_graph.hpp"
@@ -79,5 +80,20 @@ class SparsePoseAdjustment {
 
 /// One-shot optimisation (a fresh SparsePoseAdjustment).
 SparsePoseAdjustmentResult optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config = {});
+
+/// An optimisation from the start `initial` chose (pose_graph.hpp).
+struct StartedOptimization {
+  SparsePoseAdjustmentResult result;  // of the run kept (its seconds: of both runs of kBoth)
+  InitialGuessChoice start = InitialGuessChoice::kGiven;  // where the run kept started
+  double given_chi2 = 0.0;  // of the poses given
+  double estimate_chi2 = std::numeric_limits<double>::quiet_NaN();  // of the estimated start (kGiven: none)
+};
+
+/// One-shot optimisation from the given poses, an estimate from the edges (the spanning tree's or
+/// the orientations-first one), the one of the given poses and the orientations-first estimate
+/// with the lower chi2 (kBetter), or each of these two (kBoth: the lower final chi2 kept, the
+/// given poses on a tie).
+StartedOptimization optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config,
+                                        InitialGuessChoice initial);
 
 }  // namespace slam2d
