@@ -16,6 +16,7 @@ void add_odometry_command(CLI::App& app);
 void add_match_bench_command(CLI::App& app);
 void add_match_command(CLI::App& app);
 void add_optimize_command(CLI::App& app);
+void add_spoil_command(CLI::App& app);
 void add_localize_command(CLI::App& app);
 void add_perturb_command(CLI::App& app);
 void add_config_command(CLI::App& app);

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   slam2d::cli::add_match_bench_command(app);
   slam2d::cli::add_match_command(app);
   slam2d::cli::add_optimize_command(app);
+  slam2d::cli::add_spoil_command(app);
   slam2d::cli::add_localize_command(app);
   slam2d::cli::add_perturb_command(app);
   slam2d::cli::add_config_command(app);

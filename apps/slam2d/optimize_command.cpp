@@ -2,12 +2,11 @@
 // slam2d optimize GRAPH --out OUT: sparse pose adjustment (Konolige et al. 2010,
 // src/slam2d/optim/sparse_pose_adjustment.hpp) of a g2o or TORO pose graph from its own initial
 // guess or from an estimate of the edges alone (optim/initial_guess.hpp), whichever scores the
-// lower chi2 (--initial); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
+// lower chi2 (--initial), plain or with a robust kernel on the loop edges (--robust); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <string>
 
 #include "commands.hpp"
@@ -26,28 +25,22 @@ struct OptimizeOptions {
   std::string out;
   int max_iterations = SparsePoseAdjustmentConfig{}.max_iterations;
   InitialGuessChoice initial = InitialGuessChoice::kBetter;
+  RobustKernel robust{.type = RobustKernelType::kNone, .scale = 1.0};
   bool json = false;
   bool quiet = false;
 };
 
-// The format OUT's extension names (a trailing .gz is the compression, not the format).
-PoseGraphFormat output_format(const std::string& out) {
-  std::filesystem::path path(out);
-  if (path.extension() == ".gz") path = path.stem();
-  if (path.extension() == ".g2o") return PoseGraphFormat::kG2o;
-  if (path.extension() == ".graph") return PoseGraphFormat::kToro;
-  throw Error("optimize: --out " + out + ": the extension must be .g2o (g2o) or .graph (TORO), optionally + .gz");
-}
-
 const char* format_name(PoseGraphFormat format) { return format == PoseGraphFormat::kToro ? "toro" : "g2o"; }
 
 void run_optimize(const OptimizeOptions& options) {
-  const PoseGraphFormat out_format = output_format(options.out);
+  pose_graph_format_of(options.out);  // a bad extension fails before the work
   SparsePoseAdjustmentConfig config;
   config.max_iterations = options.max_iterations;
+  config.loop_kernel = options.robust;
   validate(config);
   const PoseGraphFile file = read_pose_graph(options.graph);
   PoseGraph graph = to_pose_graph(file);
+  for (PoseGraphEdge& edge : graph.edges) edge.robust = std::abs(edge.to - edge.from) > 1;  // loop edges
 
   const RunClock clock;
   const StartedOptimization started = optimize_pose_graph(graph, config, options.initial);
@@ -57,12 +50,7 @@ void run_optimize(const OptimizeOptions& options) {
 
   const std::filesystem::path out(options.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  const PoseGraphFile optimized = to_pose_graph_file(graph, file);
-  if (out_format == PoseGraphFormat::kToro) {
-    write_toro(options.out, optimized);
-  } else {
-    write_g2o(options.out, optimized);
-  }
+  write_pose_graph(options.out, to_pose_graph_file(graph, file));
 
   JsonObject summary;
   summary.add("input", options.graph).add("format", format_name(file.format));
@@ -70,6 +58,7 @@ void run_optimize(const OptimizeOptions& options) {
   summary.add("initial_guess", std::string(choice_name(started.start))).add("given_chi2", started.given_chi2);
   if (!std::isnan(started.estimate_chi2)) summary.add("estimated_start_chi2", started.estimate_chi2);
   summary.add("initial_chi2", result.initial_chi2).add("final_chi2", result.final_chi2);
+  summary.add("robust", std::string(choice_name(options.robust.type)));
   summary.add("iterations", result.iterations).add("converged", result.converged);
   summary.add("cpu_s", cpu).add("wall_s", wall).add("output", options.out);
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
@@ -86,14 +75,18 @@ void add_optimize_command(CLI::App& app) {
       ->required();
   command->add_option("--max-iterations", options->max_iterations, "Levenberg-Marquardt iterations (accepted and rejected steps)")
       ->capture_default_str();
-  std::map<std::string, InitialGuessChoice> initial;
-  for (const auto& choice : choices(InitialGuessChoice{})) initial.emplace(choice.name, choice.value);
   command->add_option("--initial", options->initial,
                       "Where to start: the file's poses (given), the odometry chain's spanning tree (tree), headings then "
                       "positions by linear least squares (orientations), the one of the file's and the orientations' "
                       "poses with the lower chi2 (better), or each of these two, keeping the lower final chi2 (both)")
-      ->transform(CLI::CheckedTransformer(initial))
+      ->transform(CLI::CheckedTransformer(choice_map<InitialGuessChoice>()))
       ->default_str("better");
+  command->add_option("--robust", options->robust.type,
+                      "Kernel on the loop edges (between nodes that are not consecutive): none, huber, cauchy, tukey or dcs")
+      ->transform(CLI::CheckedTransformer(choice_map<RobustKernelType>()))
+      ->default_str("none");
+  command->add_option("--robust-scale", options->robust.scale, "The kernel's scale k in sqrt(chi2) units (dcs: Phi = k^2)")
+      ->capture_default_str();
   command->add_flag("--json", options->json, "Print the summary as JSON");
   command->add_flag("--quiet", options->quiet, "No progress line (the optimisation prints none)");
   command->callback([options] { run_optimize(*options); });

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -102,6 +103,38 @@ TEST(OptimizeCli, TheStartIsChosenAndReported) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.errors.find("nowhere"), std::string::npos) << bad.errors;
   EXPECT_FALSE(std::filesystem::exists(dir.file("bad.g2o")));
+}
+
+// slam2d spoil: false loop closures after the graph's own edges, the same file from the same seed;
+// optimize --robust puts the kernel on the loop edges and says which.
+TEST(SpoilCli, AddsFalseClosuresAfterTheGraphsOwnEdges) {
+  TempDir dir;
+  const std::string input = write_file(dir, "square.g2o", kSquare);
+  const std::string out = dir.file("spoiled.g2o");
+  const auto spoil = [&](const std::string& to, int seed) {
+    return run_command(slam2d("spoil --json --share 0.5 --seed " + std::to_string(seed) + " " + input + " --out " + to));
+  };
+  const CommandResult result = spoil(out, 7);
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  const double loops = json_number(result.output, "loop_edges").value_or(-1.0);
+  EXPECT_GE(loops, 1.0);
+  EXPECT_EQ(json_number(result.output, "false_edges"), loops);  // half of the loop edges afterwards
+  EXPECT_EQ(json_number(result.output, "first_false_edge"), 5.0);
+  const PoseGraphFile written = read_pose_graph(out);
+  EXPECT_EQ(written.edges.size(), static_cast<std::size_t>(5 + loops));
+  EXPECT_EQ(written.vertices.size(), 4u);
+  ASSERT_EQ(spoil(dir.file("again.g2o"), 7).exit_code, 0);
+  std::ifstream a(out), b(dir.file("again.g2o"));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+
+  const CommandResult robust =
+      run_command(slam2d("optimize --json --robust dcs --robust-scale 1 " + out + " --out " + dir.file("robust.g2o")));
+  ASSERT_EQ(robust.exit_code, 0) << robust.errors;
+  EXPECT_NE(robust.output.find("\"robust\": \"dcs\""), std::string::npos) << robust.output;
+  const CommandResult bad = run_command(slam2d("spoil " + input + " --out " + dir.file("spoiled.txt")));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.errors.find(".g2o"), std::string::npos) << bad.errors;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("spoiled.txt")));
 }
 
 TEST(OptimizeCli, OutputFormatFollowsTheExtension) {

@@ -41,13 +41,15 @@ TEST_P(KernelTest, MatchesTheQuadraticNearZeroAndNeverExceedsOne) {
 
 INSTANTIATE_TEST_SUITE_P(AllKernels, KernelTest,
                          ::testing::Values(RobustKernelType::kNone, RobustKernelType::kHuber, RobustKernelType::kCauchy,
-                                           RobustKernelType::kTukey));
+                                           RobustKernelType::kTukey, RobustKernelType::kDcs));
 
 TEST(RobustKernel, HandComputedWeights) {
   EXPECT_DOUBLE_EQ(huber_weight(0.5, 1.0), 1.0);
   EXPECT_DOUBLE_EQ(huber_weight(4.0, 1.0), 0.25);
   EXPECT_DOUBLE_EQ(cauchy_weight(2.0, 1.0), 0.2);
   EXPECT_DOUBLE_EQ(tukey_weight(0.5, 1.0), 0.5625);
+  EXPECT_DOUBLE_EQ(dcs_weight(0.5, 1.0), 1.0);   // chi2 0.25 <= Phi = 1: s = 1
+  EXPECT_DOUBLE_EQ(dcs_weight(3.0, 1.0), 0.04);  // s = 2 / (1 + 9) = 0.2
   EXPECT_DOUBLE_EQ(tukey_weight(1.5, 1.0), 0.0);
   EXPECT_THROW(validate(RobustKernel{.type = RobustKernelType::kHuber, .scale = 0.0}), Error);
   EXPECT_THROW(validate(RobustKernel{.type = RobustKernelType::kHuber, .scale = NAN}), Error);

@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -117,6 +118,14 @@ std::string kind_list(const std::variant<Kinds...>*) {
   std::string list;
   ((list += (list.empty() ? "" : ", ") + std::string(Kinds::kind)), ...);
   return list;
+}
+
+/// Every name of the enum with its value, for a command-line option's transformer.
+template <typename Enum>
+std::map<std::string, Enum> choice_map() {
+  std::map<std::string, Enum> map;
+  for (const auto& choice : choices(Enum{})) map.emplace(choice.name, choice.value);
+  return map;
 }
 
 /// "a, b, c": every name of the enum, for messages and docs.

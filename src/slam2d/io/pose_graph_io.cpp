@@ -5,6 +5,7 @@
 #include "slam2d/io/pose_graph_io.hpp"
 
 #include <array>
+#include <filesystem>
 #include <initializer_list>
 #include <optional>
 #include <string_view>
@@ -204,5 +205,17 @@ PoseGraphFile read_pose_graph(const std::string& path) { return GraphFileReader(
 void write_g2o(const std::string& path, const PoseGraphFile& graph) { write_pose_graph(path, graph, kG2o); }
 
 void write_toro(const std::string& path, const PoseGraphFile& graph) { write_pose_graph(path, graph, kToro); }
+
+PoseGraphFormat pose_graph_format_of(const std::string& path) {
+  std::filesystem::path name(path);
+  if (name.extension() == ".gz") name = name.stem();  // the compression, not the format
+  if (name.extension() == ".g2o") return PoseGraphFormat::kG2o;
+  if (name.extension() == ".graph") return PoseGraphFormat::kToro;
+  throw Error(path + ": the extension must be .g2o (g2o) or .graph (TORO), optionally + .gz");
+}
+
+void write_pose_graph(const std::string& path, const PoseGraphFile& graph) {
+  write_pose_graph(path, graph, pose_graph_format_of(path) == PoseGraphFormat::kToro ? kToro : kG2o);
+}
 
 }  // namespace slam2d

@@ -18,4 +18,10 @@ PoseGraphFile read_pose_graph(const std::string& path);
 void write_g2o(const std::string& path, const PoseGraphFile& graph);
 void write_toro(const std::string& path, const PoseGraphFile& graph);
 
+/// The format a file's name asks for: .g2o or .graph (TORO), either optionally + .gz. Throws Error
+/// naming `path` for any other extension.
+PoseGraphFormat pose_graph_format_of(const std::string& path);
+/// write_g2o or write_toro, as pose_graph_format_of(path) says.
+void write_pose_graph(const std::string& path, const PoseGraphFile& graph);
+
 }  // namespace slam2d

@@ -20,10 +20,12 @@ enum class RobustKernelType {
   kHuber,   // quadratic for |r| <= k, linear beyond
   kCauchy,  // rho = k^2 / 2 log(1 + (r / k)^2)
   kTukey,   // biweight: w = (1 - (r / k)^2)^2 for |r| <= k, 0 beyond
+  kDcs,     // dynamic covariance scaling: w = s^2, s = min(1, 2 k^2 / (k^2 + r^2))
 };
 constexpr auto choices(RobustKernelType) {
   return std::array{Choice{"none", RobustKernelType::kNone}, Choice{"huber", RobustKernelType::kHuber},
-                    Choice{"cauchy", RobustKernelType::kCauchy}, Choice{"tukey", RobustKernelType::kTukey}};
+                    Choice{"cauchy", RobustKernelType::kCauchy}, Choice{"tukey", RobustKernelType::kTukey},
+                    Choice{"dcs", RobustKernelType::kDcs}};
 }
 
 struct RobustKernel {
@@ -46,13 +48,14 @@ inline constexpr RobustKernel kOdometryPriorKernel{.type = RobustKernelType::kCa
 
 template <typename Fields>
 void describe(Fields& f, RobustKernel& c) {
-  f.choice("type", c.type, "rho(r): none (r^2 / 2), huber, cauchy or tukey (biweight)");
+  f.choice("type", c.type, "rho(r): none (r^2 / 2), huber, cauchy, tukey (biweight) or dcs (dynamic covariance scaling)");
   f.number("scale", c.scale, "residual's unit", greater_than(0), "k: where the kernel departs from r^2 / 2");
 }
 
 double huber_weight(double residual, double scale);
 double cauchy_weight(double residual, double scale);
 double tukey_weight(double residual, double scale);
+double dcs_weight(double residual, double scale);
 
 /// Throws Error for a field out of its range (a non-finite or non-positive scale).
 void validate(const RobustKernel& kernel);
