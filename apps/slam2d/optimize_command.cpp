@@ -2,7 +2,8 @@
 // slam2d optimize GRAPH --out OUT: sparse pose adjustment (Konolige et al. 2010,
 // src/slam2d/optim/sparse_pose_adjustment.hpp) of a g2o or TORO pose graph from its own initial
 // guess or from an estimate of the edges alone (optim/initial_guess.hpp), whichever scores the
-// lower chi2 (--initial), plain or with a robust kernel on the loop edges (--robust); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
+// lower chi2 (--initial), plain or with a robust kernel on the loop edges (--robust); the output
+// format follows OUT's extension (.g2o or .graph, optionally .gz).
 
 #include <cmath>
 #include <cstdio>
