@@ -1,16 +1,19 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // slam2d optimize: a small inconsistent g2o loop optimised and written back (g2o, TORO, gzip), the
-// written poses scoring the reported chi2, edges-only input, and bad input giving "PATH:LINE:",
-// a non-zero exit and no output.
+// written poses scoring the reported chi2, edges-only input, false closures added by slam2d spoil
+// and rejected by GNC, and bad input giving "PATH:LINE:", a non-zero exit and no output.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "slam2d/io/pose_graph_io.hpp"
 #include "support/test_support.hpp"
@@ -135,6 +138,64 @@ TEST(SpoilCli, AddsFalseClosuresAfterTheGraphsOwnEdges) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.errors.find(".g2o"), std::string::npos) << bad.errors;
   EXPECT_FALSE(std::filesystem::exists(dir.file("spoiled.txt")));
+}
+
+// Three laps of a 10 m x 6 m rectangle, a pose every metre, exact odometry and a loop edge to the
+// pose one lap earlier at every third pose.
+std::string three_laps() {
+  std::vector<std::array<double, 3>> poses;
+  for (int k = 0; k < 96; ++k) {
+    const int s = k % 32;
+    const double drift = 0.1 * (k / 32);  // laps a little apart
+    if (s < 10) poses.push_back({s + drift, drift, 0.0});
+    else if (s < 16) poses.push_back({10 + drift, s - 10 + drift, M_PI / 2});
+    else if (s < 26) poses.push_back({10 - (s - 16) + drift, 6 + drift, M_PI});
+    else poses.push_back({drift, 6 - (s - 26) + drift, -M_PI / 2});
+  }
+  std::ostringstream text;
+  text.precision(17);
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    text << "VERTEX_SE2 " << k << " " << poses[k][0] << " " << poses[k][1] << " " << poses[k][2] << "\n";
+  }
+  const auto edge = [&](std::size_t i, std::size_t j) {
+    const double c = std::cos(poses[i][2]), s = std::sin(poses[i][2]);
+    const double dx = poses[j][0] - poses[i][0], dy = poses[j][1] - poses[i][1];
+    text << "EDGE_SE2 " << i << " " << j << " " << c * dx + s * dy << " " << -s * dx + c * dy << " "
+         << std::remainder(poses[j][2] - poses[i][2], 2 * M_PI) << " 100 0 0 100 0 400\n";
+  };
+  for (std::size_t k = 0; k + 1 < poses.size(); ++k) edge(k, k + 1);
+  for (std::size_t k = 32; k < poses.size(); k += 3) edge(k - 32, k);
+  return text.str();
+}
+
+// GNC over the truncated cost (--robust tls) keeps every true loop edge and no false one of a
+// graph with a third of its loop edges false; plain least squares keeps them all (precision 0.7).
+TEST(OptimizeCli, GraduatedNonConvexityRejectsTheFalseClosures) {
+  TempDir dir;
+  const std::string input = write_file(dir, "laps.g2o", three_laps());
+  const std::string spoiled = dir.file("spoiled.g2o");
+  const CommandResult spoil = run_command(slam2d("spoil --json --share 0.3 --seed 3 " + input + " --out " + spoiled));
+  ASSERT_EQ(spoil.exit_code, 0) << spoil.errors;
+  const double first_false = json_number(spoil.output, "first_false_edge").value_or(-1.0);
+  ASSERT_GT(first_false, 0.0);
+  const auto optimize = [&](const std::string& robust) {
+    return run_command(slam2d("optimize --json " + robust + " --outliers-from " + std::to_string(int(first_false)) +
+                              " " + spoiled + " --out " + dir.file("out.g2o")));
+  };
+  const CommandResult tls = optimize("--robust gnc --robust-scale 1");
+  ASSERT_EQ(tls.exit_code, 0) << tls.errors;
+  EXPECT_EQ(json_number(tls.output, "precision"), 1.0) << tls.output;
+  EXPECT_EQ(json_number(tls.output, "recall"), 1.0) << tls.output;
+  EXPECT_GE(json_number(tls.output, "gnc_rounds").value_or(0.0), 1.0) << tls.output;
+  EXPECT_NE(tls.output.find("\"robust\": \"tls\""), std::string::npos) << tls.output;  // gnc names tls
+  const CommandResult plain = optimize("--robust none");
+  ASSERT_EQ(plain.exit_code, 0) << plain.errors;
+  EXPECT_LT(json_number(plain.output, "precision").value_or(1.0), 0.8) << plain.output;
+  EXPECT_EQ(json_number(plain.output, "recall"), 1.0) << plain.output;
+  const CommandResult negative =
+      run_command(slam2d("optimize --outliers-from -1 " + spoiled + " --out " + dir.file("negative.g2o")));
+  EXPECT_NE(negative.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("negative.g2o")));
 }
 
 TEST(OptimizeCli, OutputFormatFollowsTheExtension) {

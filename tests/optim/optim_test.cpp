@@ -41,7 +41,8 @@ TEST_P(KernelTest, MatchesTheQuadraticNearZeroAndNeverExceedsOne) {
 
 INSTANTIATE_TEST_SUITE_P(AllKernels, KernelTest,
                          ::testing::Values(RobustKernelType::kNone, RobustKernelType::kHuber, RobustKernelType::kCauchy,
-                                           RobustKernelType::kTukey, RobustKernelType::kDcs));
+                                           RobustKernelType::kTukey, RobustKernelType::kDcs,
+                                           RobustKernelType::kTls));
 
 TEST(RobustKernel, HandComputedWeights) {
   EXPECT_DOUBLE_EQ(huber_weight(0.5, 1.0), 1.0);
@@ -51,6 +52,9 @@ TEST(RobustKernel, HandComputedWeights) {
   EXPECT_DOUBLE_EQ(dcs_weight(0.5, 1.0), 1.0);   // chi2 0.25 <= Phi = 1: s = 1
   EXPECT_DOUBLE_EQ(dcs_weight(3.0, 1.0), 0.04);  // s = 2 / (1 + 9) = 0.2
   EXPECT_DOUBLE_EQ(tukey_weight(1.5, 1.0), 0.0);
+  EXPECT_DOUBLE_EQ((RobustKernel{.type = RobustKernelType::kTls, .scale = 1.0}.weight(0.99)), 1.0);
+  EXPECT_DOUBLE_EQ((RobustKernel{.type = RobustKernelType::kTls, .scale = 1.0}.weight(-1.01)), 0.0);
+  EXPECT_DOUBLE_EQ((RobustKernel{.type = RobustKernelType::kTls, .scale = 1.0}.cost(7.0)), 0.5);
   EXPECT_THROW(validate(RobustKernel{.type = RobustKernelType::kHuber, .scale = 0.0}), Error);
   EXPECT_THROW(validate(RobustKernel{.type = RobustKernelType::kHuber, .scale = NAN}), Error);
 }

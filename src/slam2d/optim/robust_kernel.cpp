@@ -41,6 +41,7 @@ double RobustKernel::kernel_weight(double residual) const {
     case RobustKernelType::kCauchy: return cauchy_weight(residual, scale);
     case RobustKernelType::kTukey: return tukey_weight(residual, scale);
     case RobustKernelType::kDcs: return dcs_weight(residual, scale);
+    case RobustKernelType::kTls: return std::abs(residual) <= scale ? 1.0 : 0.0;
     case RobustKernelType::kNone: break;
   }
   return 1.0;
@@ -61,6 +62,7 @@ double RobustKernel::cost(double residual) const {
       const double phi = k * k;
       return a <= k ? 0.5 * a * a : 1.5 * phi - 2.0 * phi * phi / (phi + a * a);
     }
+    case RobustKernelType::kTls: return 0.5 * std::min(a, k) * std::min(a, k);
     case RobustKernelType::kNone: break;
   }
   return 0.5 * a * a;

@@ -21,11 +21,12 @@ enum class RobustKernelType {
   kCauchy,  // rho = k^2 / 2 log(1 + (r / k)^2)
   kTukey,   // biweight: w = (1 - (r / k)^2)^2 for |r| <= k, 0 beyond
   kDcs,     // dynamic covariance scaling: w = s^2, s = min(1, 2 k^2 / (k^2 + r^2))
+  kTls,     // truncated least squares: rho = min(r^2, k^2) / 2, w = 1 for |r| <= k, 0 beyond
 };
 constexpr auto choices(RobustKernelType) {
   return std::array{Choice{"none", RobustKernelType::kNone}, Choice{"huber", RobustKernelType::kHuber},
                     Choice{"cauchy", RobustKernelType::kCauchy}, Choice{"tukey", RobustKernelType::kTukey},
-                    Choice{"dcs", RobustKernelType::kDcs}};
+                    Choice{"dcs", RobustKernelType::kDcs}, Choice{"tls", RobustKernelType::kTls}};
 }
 
 struct RobustKernel {
@@ -48,7 +49,9 @@ inline constexpr RobustKernel kOdometryPriorKernel{.type = RobustKernelType::kCa
 
 template <typename Fields>
 void describe(Fields& f, RobustKernel& c) {
-  f.choice("type", c.type, "rho(r): none (r^2 / 2), huber, cauchy, tukey (biweight) or dcs (dynamic covariance scaling)");
+  f.choice("type", c.type,
+           "rho(r): none (r^2 / 2), huber, cauchy, tukey (biweight), dcs (dynamic covariance scaling) or tls (truncated "
+           "least squares; the pose graph back end reaches it by graduated non-convexity)");
   f.number("scale", c.scale, "residual's unit", greater_than(0), "k: where the kernel departs from r^2 / 2");
 }
 

@@ -67,6 +67,18 @@ Cost evaluate(const std::vector<PoseGraphEdge>& edges, const std::vector<SE2>& p
   return cost;
 }
 
+// The kernel's weight of each edge at the graph's poses (1 for edges that are not robust).
+std::vector<double> edge_weights(const PoseGraph& graph, const RobustKernel& kernel) {
+  std::vector<double> weights(graph.edges.size(), 1.0);
+  for (std::size_t k = 0; k < graph.edges.size(); ++k) {
+    const PoseGraphEdge& edge = graph.edges[k];
+    if (!edge.robust) continue;
+    const Eigen::Vector3d e = edge_error(edge, graph.poses[edge.from], graph.poses[edge.to]);
+    weights[k] = kernel.weight(std::sqrt(e.dot(edge.information * e)));
+  }
+  return weights;
+}
+
 void check_edge(const PoseGraphEdge& edge, std::size_t k, int nodes) {
   const auto fail = [&](const std::string& what) {
     throw Error("sparse pose adjustment: edge " + std::to_string(k) + " (" + std::to_string(edge.from) + " -> " +
@@ -368,6 +380,7 @@ SparsePoseAdjustment& SparsePoseAdjustment::operator=(SparsePoseAdjustment&&) no
 SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
   const auto start = std::chrono::steady_clock::now();
   check_graph(graph);
+  if (config_.loop_kernel.type == RobustKernelType::kTls) return optimize_graduated(graph, config_);
   if (!solver_) solver_ = std::make_unique<Solver>();
   Solver& solver = *solver_;
   solver.prepare(graph);
@@ -399,6 +412,7 @@ SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
   }
   lambda_ = lambda;
   result.final_chi2 = cost.chi2;
+  result.edge_weights = edge_weights(graph, config_.loop_kernel);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

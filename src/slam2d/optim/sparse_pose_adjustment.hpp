@@ -8,7 +8,9 @@
 // column), the damped system (H + lambda diag(H)) dx = -b solved by sparse Cholesky (CHOLMOD,
 // supernodal, fill-reducing ordering analysed once per graph structure and reused), poses updated
 // by x <- x + dx on (x, y, theta) with the angle normalised. Fixed nodes are eliminated. Edges
-// marked robust enter with IRLS weights of the configured kernel on sqrt(e^T Omega e).
+// marked robust enter with IRLS weights of the configured kernel on sqrt(e^T Omega e); the
+// truncated-least-squares kernel is reached by graduated non-convexity instead
+// (graduated_non_convexity.hpp), as plain IRLS on it keeps whatever the start makes an inlier.
 //
 // Warm start: a SparsePoseAdjustment object keeps the symbolic factorisation while the node count
 // and edge pattern are unchanged (only extended graphs re-analyse) and the last damping, so the
@@ -17,7 +19,9 @@
 #include <cstddef>
 #include <limits>
 #include <memory>
+#include <vector>
 
+#include "slam2d/optim/graduated_non_convexity.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/optim/robust_kernel.hpp"
 
@@ -31,6 +35,7 @@ struct SparsePoseAdjustmentConfig {
   double relative_tolerance = 1e-9;
   double step_tolerance = 1e-10;
   RobustKernel loop_kernel{};
+  GraduatedNonConvexityConfig graduated{};
 };
 
 template <typename Fields>
@@ -44,6 +49,7 @@ void describe(Fields& f, SparsePoseAdjustmentConfig& c) {
   f.number("step_tolerance", c.step_tolerance, "m and rad", at_least(0),
            "converged when a step moves no coordinate by more than this");
   f.section("loop_kernel", c.loop_kernel, "for edges with robust = true (none: plain least squares)");
+  f.section("graduated", c.graduated, "graduated non-convexity, for loop_kernel.type tls");
 }
 
 struct SparsePoseAdjustmentResult {
@@ -51,6 +57,11 @@ struct SparsePoseAdjustmentResult {
   double final_chi2 = 0.0;    // ... after
   int iterations = 0;         // LM iterations run
   bool converged = false;     // the relative tolerance was met before max_iterations
+  int rounds = 0;             // weight updates of graduated non-convexity (tls kernel; else 0)
+  // Each edge's weight at the end, by edge index (1 for edges that are not robust): the kernel's
+  // at the final residual, or the decision of graduated non-convexity (tls: 0 or 1). At least 0.5:
+  // the back end keeps the edge; below, it rejects it (precision and recall of a robust back end).
+  std::vector<double> edge_weights;
   double seconds = 0.0;       // wall time of the optimisation
 };
 
