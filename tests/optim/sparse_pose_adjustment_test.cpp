@@ -332,6 +332,42 @@ TEST(GraduatedNonConvexity, RejectsEveryFalseClosureOfASimulatedGraph) {
   EXPECT_LT(max_translation_error(clean.poses, laps.truth), 1e-6);
 }
 
+// An incremental back end (one object, edges appended between calls) keeps its last decisions
+// where they still hold: a true closure appended costs no round and ends where a fresh GNC does;
+// a false one appended is found (a fresh GNC from least squares) and dropped.
+TEST(GraduatedNonConvexity, AnIncrementalBackEndKeepsItsDecisionsWhileTheyHold) {
+  Rng rng(8);
+  TruthGraph laps = make_laps(3, rng);
+  for (PoseGraphEdge& edge : laps.graph.edges) edge.robust = edge.to != edge.from + 1;
+  const SparsePoseAdjustmentConfig config =
+      config_with([](auto& c) { c.loop_kernel = {.type = RobustKernelType::kTls, .scale = 1.0}; });
+  PoseGraph graph = laps.graph;
+  graph.edges.push_back(make_edge(5, 40, SE2(3.0, -2.0, 1.0), random_information(rng), true));  // false
+  perturb(graph, rng, 0.1, 0.02);
+  SparsePoseAdjustment back_end(config);
+  const SparsePoseAdjustmentResult first = back_end.optimize(graph);
+  EXPECT_GT(first.rounds, 0);
+  EXPECT_EQ(first.edge_weights.back(), 0.0);
+  EXPECT_LT(max_translation_error(graph.poses, laps.truth), 1e-6);
+
+  graph.edges.push_back(make_edge(10, 74, laps.truth[10].between(laps.truth[74]), random_information(rng), true));
+  const SparsePoseAdjustmentResult kept = back_end.optimize(graph);
+  EXPECT_EQ(kept.rounds, 0);  // the decisions held
+  EXPECT_EQ(kept.edge_weights[kept.edge_weights.size() - 2], 0.0);
+  EXPECT_EQ(kept.edge_weights.back(), 1.0);
+  EXPECT_LT(max_translation_error(graph.poses, laps.truth), 1e-6);
+
+  graph.edges.push_back(make_edge(12, 80, SE2(-4.0, 1.0, -2.0), random_information(rng), true));  // false
+  const SparsePoseAdjustmentResult found = back_end.optimize(graph);
+  EXPECT_GT(found.rounds, 0);  // the warm start disagreed: GNC afresh
+  EXPECT_EQ(found.edge_weights.back(), 0.0);
+  EXPECT_LT(max_translation_error(graph.poses, laps.truth), 1e-6);
+  PoseGraph fresh = graph;
+  perturb(fresh, rng, 0.1, 0.02);
+  optimize_pose_graph(fresh, config);
+  EXPECT_LT(max_translation_error(fresh.poses, graph.poses), 1e-6);
+}
+
 TEST(SparsePoseAdjustment, WarmStartEqualsAFreshOptimisation) {
   Rng rng(13);
   const TruthGraph laps = make_laps(3, rng);

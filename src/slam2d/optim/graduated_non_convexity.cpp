@@ -45,7 +45,8 @@ PoseGraph weighted(const PoseGraph& graph, const std::vector<double>& weights) {
 
 }  // namespace
 
-SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePoseAdjustmentConfig& config) {
+SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePoseAdjustmentConfig& config,
+                                              const std::vector<double>& previous_weights) {
   const auto start = std::chrono::steady_clock::now();
   const double c2 = config.loop_kernel.scale * config.loop_kernel.scale;
   const GraduatedNonConvexityConfig& gnc = config.graduated;
@@ -76,6 +77,28 @@ SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePose
     }
     return max_r2;
   };
+
+  // Warm start (an incremental back end, edges appended since): the last decisions kept, the new
+  // edges in; if the solution agrees with every decision (kept edges within c, dropped ones
+  // beyond), it is a fixed point of the truncated cost and the answer, else GNC starts afresh.
+  if (!previous_weights.empty() && previous_weights.size() <= graph.edges.size()) {
+    std::copy(previous_weights.begin(), previous_weights.end(), weights.begin());
+    PoseGraph work = weighted(graph, weights);
+    SparsePoseAdjustmentConfig warm = round_config;
+    warm.max_iterations = config.max_iterations;
+    const SparsePoseAdjustmentResult solved = optimize_pose_graph(work, warm);
+    result.iterations += solved.iterations;
+    result.converged = solved.converged;
+    bool agrees = true;
+    for (std::size_t k = 0; k < graph.edges.size() && agrees; ++k) {
+      if (graph.edges[k].robust) agrees = (squared_residual(graph.edges[k], work.poses) <= c2) == (weights[k] > 0.0);
+    }
+    if (agrees) {
+      graph.poses = std::move(work.poses);
+      return finish();
+    }
+    std::fill(weights.begin(), weights.end(), 1.0);
+  }
 
   // Round 0: least squares over every edge (mu -> 0), a few iterations at a time: where every
   // robust edge stays within c it is the answer (the common case of an incremental SLAM back end),

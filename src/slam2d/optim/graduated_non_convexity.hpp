@@ -21,6 +21,8 @@
 // then solves the kept edges to convergence. An edge of weight 0 leaves the system, so the fill-in
 // of far false closures costs only the first rounds.
 
+#include <vector>
+
 #include "slam2d/core/config_fields.hpp"
 
 namespace slam2d {
@@ -49,6 +51,10 @@ double truncated_least_squares_weight(double r2, double c2, double mu);
 /// Optimises graph.poses in place: GNC over the truncated-least-squares cost of the robust edges,
 /// c = config.loop_kernel.scale, each weighted least squares by Levenberg-Marquardt with config's
 /// settings. The result counts the LM iterations of every round (`rounds`: the weight updates).
-SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePoseAdjustmentConfig& config);
+/// `previous_weights`, the edge_weights of the last optimisation of this graph before edges were
+/// appended (an incremental SLAM back end), are tried first: kept where the solution with them
+/// agrees with each (kept edges within c, dropped ones beyond), a fresh GNC otherwise.
+SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePoseAdjustmentConfig& config,
+                                              const std::vector<double>& previous_weights = {});
 
 }  // namespace slam2d

@@ -380,7 +380,11 @@ SparsePoseAdjustment& SparsePoseAdjustment::operator=(SparsePoseAdjustment&&) no
 SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
   const auto start = std::chrono::steady_clock::now();
   check_graph(graph);
-  if (config_.loop_kernel.type == RobustKernelType::kTls) return optimize_graduated(graph, config_);
+  if (config_.loop_kernel.type == RobustKernelType::kTls) {
+    SparsePoseAdjustmentResult result = optimize_graduated(graph, config_, graduated_weights_);
+    graduated_weights_ = result.edge_weights;
+    return result;
+  }
   if (!solver_) solver_ = std::make_unique<Solver>();
   Solver& solver = *solver_;
   solver.prepare(graph);

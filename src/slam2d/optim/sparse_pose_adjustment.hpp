@@ -87,6 +87,7 @@ class SparsePoseAdjustment {
   SparsePoseAdjustmentConfig config_;
   std::unique_ptr<Solver> solver_;
   double lambda_ = 0.0;  // the damping the last optimisation ended with
+  std::vector<double> graduated_weights_;  // tls: the last optimisation's decisions, by edge
 };
 
 /// One-shot optimisation (a fresh SparsePoseAdjustment).
