@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "slam2d/core/error.hpp"
@@ -52,6 +53,12 @@ Eigen::Matrix3d information_from_covariance(const Covariance3& cov) {
   Eigen::FullPivLU<Matrix3> lu(cov);
   check(lu.isInvertible(), "information_from_covariance: singular covariance");
   return lu.inverse();
+}
+
+double chi_square_quantile(double dof, double z) {
+  const double a = 2.0 / (9.0 * dof);
+  const double b = std::max(0.0, 1.0 - a + std::sqrt(a) * z);
+  return dof * b * b * b;
 }
 
 Ellipse translation_ellipse(const Covariance3& cov) {

@@ -40,6 +40,12 @@ Covariance3 make_positive_definite(const Covariance3& cov, double min_eigenvalue
 /// The information matrix cov^-1 of a positive definite covariance.
 Eigen::Matrix3d information_from_covariance(const Covariance3& cov);
 
+/// The quantile of chi-square with `dof` degrees of freedom at the probability whose standard
+/// normal quantile is z (3.09: 99.9 %), by Wilson and Hilferty's cube-root normal approximation
+/// (within 2 % of the exact quantile from 3 degrees of freedom on, 0.2 % from 30): a Mahalanobis
+/// gate.
+double chi_square_quantile(double dof, double z);
+
 /// The 1-sigma ellipse of the translational block: semi-axes (m) and the major axis angle (rad).
 struct Ellipse {
   double major = 0.0;

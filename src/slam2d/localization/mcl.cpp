@@ -34,10 +34,8 @@ void draw_low_variance(const std::vector<SE2>& poses, const std::vector<double>&
 
 std::size_t kld_particle_count(std::size_t k, double epsilon, double z) {
   if (k <= 1) return 1;
-  const double km1 = static_cast<double>(k - 1);
-  const double a = 2.0 / (9.0 * km1);
-  const double b = 1.0 - a + std::sqrt(a) * z;
-  return static_cast<std::size_t>(std::ceil(km1 / (2.0 * epsilon) * b * b * b));  // Fox 2003, Eq. (10)
+  // Fox 2003, Eq. (10): chi-square's 1 - delta quantile with k - 1 degrees of freedom over 2 epsilon.
+  return static_cast<std::size_t>(std::ceil(chi_square_quantile(static_cast<double>(k - 1), z) / (2.0 * epsilon)));
 }
 
 void weighted_pose_statistics(const std::vector<SE2>& poses, const std::vector<double>& weights, SE2* mean,

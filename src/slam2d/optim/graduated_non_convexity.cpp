@@ -21,11 +21,6 @@ double truncated_least_squares_weight(double r2, double c2, double mu) {
 
 namespace {
 
-double squared_residual(const PoseGraphEdge& edge, const std::vector<SE2>& poses) {
-  const Eigen::Vector3d e = edge_error(edge, poses[edge.from], poses[edge.to]);
-  return e.dot(edge.information * e);
-}
-
 // The weighted least squares of one round: the robust edges with their information times their
 // weight, those of weight 0 left out (so that far false closures stop filling the factor in).
 PoseGraph weighted(const PoseGraph& graph, const std::vector<double>& weights) {
@@ -73,7 +68,7 @@ SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePose
   const auto max_robust_r2 = [&] {
     double max_r2 = 0.0;
     for (const PoseGraphEdge& edge : graph.edges) {
-      if (edge.robust) max_r2 = std::max(max_r2, squared_residual(edge, graph.poses));
+      if (edge.robust) max_r2 = std::max(max_r2, squared_error(edge, graph.poses));
     }
     return max_r2;
   };
@@ -91,7 +86,7 @@ SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePose
     result.converged = solved.converged;
     bool agrees = true;
     for (std::size_t k = 0; k < graph.edges.size() && agrees; ++k) {
-      if (graph.edges[k].robust) agrees = (squared_residual(graph.edges[k], work.poses) <= c2) == (weights[k] > 0.0);
+      if (graph.edges[k].robust) agrees = (squared_error(graph.edges[k], work.poses) <= c2) == (weights[k] > 0.0);
     }
     if (agrees) {
       graph.poses = std::move(work.poses);
@@ -116,7 +111,7 @@ SparsePoseAdjustmentResult optimize_graduated(PoseGraph& graph, const SparsePose
     bool binary = true;
     for (std::size_t k = 0; k < graph.edges.size(); ++k) {
       if (!graph.edges[k].robust) continue;
-      weights[k] = truncated_least_squares_weight(squared_residual(graph.edges[k], graph.poses), c2, mu);
+      weights[k] = truncated_least_squares_weight(squared_error(graph.edges[k], graph.poses), c2, mu);
       binary = binary && (weights[k] == 0.0 || weights[k] == 1.0);
     }
     if (binary) break;  // each edge kept or dropped: the truncated cost's decision

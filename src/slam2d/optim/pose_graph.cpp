@@ -127,14 +127,18 @@ Eigen::Vector3d edge_error(const PoseGraphEdge& edge, const SE2& T_world_from, c
   return e;
 }
 
+double squared_error(const PoseGraphEdge& edge, const std::vector<SE2>& poses) {
+  const Eigen::Vector3d e = edge_error(edge, poses[edge.from], poses[edge.to]);
+  return e.dot(edge.information * e);
+}
+
 // Eq. (3): chi2 = sum e^T Omega e.
 double chi2(const PoseGraph& graph) {
   const int n = static_cast<int>(graph.size());
   double sum = 0.0;
   for (const PoseGraphEdge& edge : graph.edges) {
     check(edge.from >= 0 && edge.from < n && edge.to >= 0 && edge.to < n, "chi2: edge node out of range");
-    const Eigen::Vector3d e = edge_error(edge, graph.poses[edge.from], graph.poses[edge.to]);
-    sum += e.dot(edge.information * e);
+    sum += squared_error(edge, graph.poses);
   }
   return sum;
 }

@@ -42,6 +42,9 @@ struct PoseGraph {
 Eigen::Vector3d edge_error(const PoseGraphEdge& edge, const SE2& T_world_from, const SE2& T_world_to,
                            Eigen::Matrix3d* J_from = nullptr, Eigen::Matrix3d* J_to = nullptr);
 
+/// The edge's squared Mahalanobis error e^T Omega e at the poses (no robust kernel).
+double squared_error(const PoseGraphEdge& edge, const std::vector<SE2>& poses);
+
 /// sum e^T Omega e over all edges (no robust kernel).
 double chi2(const PoseGraph& graph);
 

@@ -59,8 +59,7 @@ void add_block(std::vector<double>& values, const BlockSlot& slot, const Eigen::
 Cost evaluate(const std::vector<PoseGraphEdge>& edges, const std::vector<SE2>& poses, const RobustKernel& kernel) {
   Cost cost;
   for (const PoseGraphEdge& edge : edges) {
-    const Eigen::Vector3d e = edge_error(edge, poses[edge.from], poses[edge.to]);
-    const double r2 = e.dot(edge.information * e);
+    const double r2 = squared_error(edge, poses);
     cost.chi2 += r2;
     cost.robust += edge.robust ? 2.0 * kernel.cost(std::sqrt(r2)) : r2;
   }
@@ -73,8 +72,7 @@ std::vector<double> edge_weights(const PoseGraph& graph, const RobustKernel& ker
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     const PoseGraphEdge& edge = graph.edges[k];
     if (!edge.robust) continue;
-    const Eigen::Vector3d e = edge_error(edge, graph.poses[edge.from], graph.poses[edge.to]);
-    weights[k] = kernel.weight(std::sqrt(e.dot(edge.information * e)));
+    weights[k] = kernel.weight(std::sqrt(squared_error(edge, graph.poses)));
   }
   return weights;
 }
@@ -378,6 +376,11 @@ SparsePoseAdjustment& SparsePoseAdjustment::operator=(SparsePoseAdjustment&&) no
 // The LM loop of Sec. IV: linearise, solve the damped system (Eq. (4)), keep the step if it lowers
 // the (robust) cost and relax the damping, else raise the damping and solve again.
 SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
+  return optimize(graph, config_.relative_tolerance);
+}
+
+SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph, double relative_tolerance) {
+  check(relative_tolerance >= 0.0, "sparse pose adjustment: relative tolerance must be >= 0");
   const auto start = std::chrono::steady_clock::now();
   check_graph(graph);
   if (config_.loop_kernel.type == RobustKernelType::kTls) {
@@ -412,7 +415,7 @@ SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph) {
     }
     // Converged: the cost changes by less than the tolerance either way (a rejected step that
     // barely changes it is rounding at the minimum), or the step barely moves.
-    result.converged = std::abs(decrease) < config_.relative_tolerance || solver.step_size() <= config_.step_tolerance;
+    result.converged = std::abs(decrease) < relative_tolerance || solver.step_size() <= config_.step_tolerance;
   }
   lambda_ = lambda;
   result.final_chi2 = cost.chi2;

@@ -79,6 +79,10 @@ class SparsePoseAdjustment {
   /// non-finite pose or measurement, or an information matrix that is not symmetric positive
   /// semi-definite.
   SparsePoseAdjustmentResult optimize(PoseGraph& graph);
+  /// The same, converged at this relative tolerance instead of the configuration's (a SLAM run's
+  /// optimisations between closures, whose poses only its front end reads). The tls kernel's
+  /// graduated non-convexity keeps its own schedule.
+  SparsePoseAdjustmentResult optimize(PoseGraph& graph, double relative_tolerance);
 
   const SparsePoseAdjustmentConfig& config() const { return config_; }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
 #include "slam2d/registration/match_fusion.hpp"
@@ -195,7 +196,9 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
 // only keeps the chain in place).
 int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final) {
   bool loop_closed = false;
+  bool new_loop = false;
   for (const LoopClosure& closure : closures) {
+    if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
     graph_.edges.push_back(closure.edge);
     keyframes_[closure.keyframe].loop_anchors.push_back(closure.anchor);
     if (closure.near()) {
@@ -206,7 +209,13 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     if (final) ++stats_.final_search_closures;
     loop_closed = true;
   }
-  if (loop_closed) optimize();
+  if (loop_closed) {
+    if (!config_.defer_agreeing_closures || new_loop || estimate_disagrees()) {
+      optimize(config_.run_relative_tolerance);
+    } else {
+      ++stats_.deferred_optimizations;
+    }
+  }
   if (lifelong()) {
     for (const LoopClosure& closure : closures) recheck_near(closure.keyframe);
   }
@@ -314,17 +323,42 @@ void GraphSlam::copy_loop_stats() {
   stats_.held_dropped = loops.held_dropped;
 }
 
-void GraphSlam::optimize() {
-  const SparsePoseAdjustmentResult result = back_end_.optimize(graph_);
+// Whether the edge joins two keyframes the graph does not yet hold together: no path along its edges
+// within link_reach() (a loop closed for the first time, not a revisit of a place already closed).
+bool GraphSlam::closes_new_loop(const PoseGraphEdge& edge) const {
+  const double reach = link_reach();
+  const std::vector<GraphPath> paths = graph_paths(graph_, static_cast<std::size_t>(edge.to), reach);
+  return !(paths[static_cast<std::size_t>(edge.from)].distance <= reach);
+}
+
+// Whether the loop edges added since the last optimisation disagree with the current poses beyond
+// their own noise (defer_agreeing_closures).
+bool GraphSlam::estimate_disagrees() const {
+  double sum = 0.0;
+  double loop_edges = 0.0;
+  for (std::size_t k = first_unoptimized_edge_; k < graph_.edges.size(); ++k) {
+    const PoseGraphEdge& edge = graph_.edges[k];
+    if (edge.to != edge.from + 1) {  // a loop edge: the sequential and odometry edges join consecutive nodes
+      sum += squared_error(edge, graph_.poses);
+      loop_edges += 1.0;
+    }
+  }
+  return loop_edges > 0.0 && sum > chi_square_quantile(3.0 * loop_edges, config_.optimize_gate_z);
+}
+
+void GraphSlam::optimize(double relative_tolerance) {
+  first_unoptimized_edge_ = graph_.edges.size();
+  const SparsePoseAdjustmentResult result = back_end_.optimize(graph_, relative_tolerance);
   stats_.optimization_seconds += result.seconds;
   ++stats_.optimizations;
+  stats_.optimization_iterations += static_cast<std::size_t>(result.iterations);
 }
 
 void GraphSlam::finish() {
   for (std::size_t k = loop_closer_.first_unsearched(); k < keyframes_.size(); ++k) close_loops(k, true);
   add_closures(loop_closer_.release(), true);
   copy_loop_stats();
-  if (graph_.poses.size() > 1) optimize();
+  if (graph_.poses.size() > 1) optimize(config_.back_end.relative_tolerance);
 }
 
 // A scan between keyframes a and b: its tracked motion from a carried forward from a's optimised

@@ -33,9 +33,11 @@
 //    by a second keyframe before it goes in; a local closure is held back while later searches
 //    keep matching the same chain, replaced by a better one, and goes in when they stop
 //    (loop_closure.hpp);
-// 4. back end: sparse pose adjustment after every loop closure and at the end
-//    (optim/sparse_pose_adjustment.hpp), warm-started; finish() first searches from the last
-//    keyframes the search interval skipped, so that a loop closing at the end of a log closes.
+// 4. back end: sparse pose adjustment (optim/sparse_pose_adjustment.hpp), warm-started, after a
+//    closure that closes a new loop or when the closures not yet optimised disagree with the
+//    estimate (a revisit of a place closed before waits: defer_agreeing_closures), and at the end;
+//    finish() first searches from the last keyframes the search interval skipped, so that a loop
+//    closing at the end of a log closes.
 // 5. lifelong (keyframes.redundant_radius > 0, the default): the data a run keeps is bounded by
 //    place, not by time (slam_toolbox's lifelong mode, Cartographer's trimmer, in their simplest
 //    form). A keyframe the loop closer is done with (searched or skipped by the search interval,
@@ -95,6 +97,21 @@ struct GraphSlamConfig {
   OdometryNoiseConfig odometry_noise{};
   LoopClosureConfig loop_closure{};
   SparsePoseAdjustmentConfig back_end{.loop_kernel = {.type = RobustKernelType::kCauchy, .scale = 3.0}};
+  // The back end's schedule. Karto optimises after every loop closure, so a run's cost grows with
+  // its closures times its graph: ten passes over one route cost 19x (FR079) and 69x (Intel) the
+  // CPU time of one. Here a closure that closes a loop the graph did not yet hold (no path along
+  // its edges within 2 x loop_closure.min_path_distance) is optimised at once, as Karto does; one
+  // along a place already closed (a revisit) waits while the loop edges not yet optimised agree
+  // with the estimate: their summed e^T Omega e at the current poses within chi-square's quantile
+  // (3 degrees of freedom an edge) at the standard normal quantile optimize_gate_z (3.09: 99.9 %).
+  // Such closures would move the poses by less than their own noise, which the front end cannot
+  // see; finish() always optimises. false: after every closure (Karto's schedule).
+  bool defer_agreeing_closures = true;
+  double optimize_gate_z = 3.09;
+  // The optimisations during the run stop when an accepted step lowers the cost by less than this
+  // fraction (the front end reads their poses to a centimetre); finish()'s final one at
+  // back_end.relative_tolerance.
+  double run_relative_tolerance = 1e-4;
   double map_resolution = 0.05;
 };
 
@@ -116,6 +133,12 @@ void describe(Fields& f, GraphSlamConfig& c) {
   f.section("odometry_noise", c.odometry_noise, "the odometry edges' motion noise model (core/motion_fusion.hpp)");
   f.section("loop_closure", c.loop_closure, "the loop closer");
   f.section("back_end", c.back_end, "the sparse pose adjustment");
+  f.flag("defer_agreeing_closures", c.defer_agreeing_closures,
+         "optimise after a closure only when the closures not yet optimised disagree with the estimate");
+  f.number("optimize_gate_z", c.optimize_gate_z, "1", any_value(),
+           "... beyond chi-square's quantile (3 dof an edge) at this standard normal quantile");
+  f.number("run_relative_tolerance", c.run_relative_tolerance, "1", at_least(0),
+           "the back end's relative_tolerance during the run (finish(): back_end.relative_tolerance)");
   f.number("map_resolution", c.map_resolution, "m per cell", greater_than(0), "of the occupancy map built from the keyframes");
 }
 
@@ -143,6 +166,8 @@ struct GraphSlamStats {
   std::size_t held_replaced = 0;        // delayed: held closures replaced by a better one of the same chain
   std::size_t held_dropped = 0;         // delayed: closures dropped for a better one held to the same chain
   std::size_t optimizations = 0;
+  std::size_t optimization_iterations = 0;  // LM iterations over all optimisations
+  std::size_t deferred_optimizations = 0;   // closures whose optimisation was deferred (they agreed)
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
   std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
@@ -212,7 +237,9 @@ class GraphSlam {
   std::optional<std::size_t> linked_witness(std::size_t keyframe, std::size_t linked, std::size_t anchor) const;
   bool redundant(std::size_t keyframe, std::size_t older) const;
   void copy_loop_stats();
-  void optimize();
+  void optimize(double relative_tolerance);
+  bool closes_new_loop(const PoseGraphEdge& edge) const;
+  bool estimate_disagrees() const;
   SE2 current_pose() const;
   SE2 interpolated_pose(const ScanRecord& record) const;
 
@@ -232,6 +259,7 @@ class GraphSlam {
   OdometryNoiseModel odometry_noise_;
   SE2 odometry_since_keyframe_;       // the odometry's increments since the last keyframe, composed
   bool odometry_intact_ = false;      // ... all trusted by the guard (and odometry came)
+  std::size_t first_unoptimized_edge_ = 0;  // the edges from here on came after the last optimisation
 };
 
 }  // namespace slam2d
