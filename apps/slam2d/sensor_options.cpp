@@ -8,6 +8,10 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
 
 #include "progress.hpp"
 #include "slam2d/core/angles.hpp"
@@ -118,6 +122,48 @@ void add_odometry_time_offset_option(CLI::App* command, std::string& spec) {
       ->capture_default_str();
 }
 
+// The log's messages as the time-offset estimate needs them, read twice: first every message with
+// the laser scans' ranges and intensities dropped as they come (stamps and odometry poses are all
+// the estimate reads of most scans), then again for the ranges of the scans it matches
+// (odometry_time_offset_scans: at most 6,000 of them). Holding a whole long log instead (an hour
+// of a 1080-beam scanner at 40 Hz is over a gigabyte) would be the run's peak memory.
+namespace {
+
+std::vector<SensorMessage> read_for_time_offset(const std::string& log, const LogReaderOptions& options, Progress& progress) {
+  std::vector<SensorMessage> messages;
+  {
+    LogReader reader(log, options);
+    while (auto message = reader.next()) {
+      if (auto* laser = std::get_if<LaserMessage>(&*message)) {
+        std::vector<double>().swap(laser->scan.ranges);  // freed, not only emptied
+        std::vector<double>().swap(laser->scan.intensities);
+      }
+      messages.push_back(std::move(*message));
+      if (messages.size() % 4096 == 0) progress.update(0.5 * reader.progress(), fmt::format("{} messages read", messages.size()));
+    }
+  }
+  const std::vector<std::size_t> used = odometry_time_offset_scans(messages);
+  LogReader reader(log, options);
+  std::size_t index = 0;
+  for (const std::size_t wanted : used) {
+    std::optional<SensorMessage> message;
+    while (index <= wanted) {
+      message = reader.next();
+      check(message.has_value(), log + ": the log changed while it was read for the odometry time offset");
+      ++index;
+    }
+    auto* laser = std::get_if<LaserMessage>(&*message);
+    auto* kept = std::get_if<LaserMessage>(&messages[wanted]);
+    check(laser != nullptr && kept != nullptr && laser->scan.stamp == kept->scan.stamp,
+          log + ": the log changed while it was read for the odometry time offset");
+    kept->scan = std::move(laser->scan);
+    if (index % 256 == 0) progress.update(0.5 + 0.5 * reader.progress(), fmt::format("{} scans read again", used.size()));
+  }
+  return messages;
+}
+
+}  // namespace
+
 OdometryTimeOffsetChoice estimate_odometry_time_offset_choice(const std::vector<SensorMessage>& messages) {
   OdometryTimeOffsetChoice choice{.mode = "auto", .estimate = estimate_odometry_time_offset(messages)};
   if (choice.estimate->significant) choice.applied = choice.estimate->offset;
@@ -130,12 +176,9 @@ OdometryTimeOffsetChoice resolve_odometry_time_offset(const std::string& log, co
   if (spec == "auto") {
     LogReaderOptions as_logged = options;
     as_logged.odometry_time_offset = 0.0;
-    LogReader reader(log, as_logged);
     Progress progress("odometry time offset", quiet);
-    const std::vector<SensorMessage> messages =
-        read_all(reader, [&](double fraction, std::size_t n) { progress.update(fraction, fmt::format("{} messages read", n)); });
+    choice = estimate_odometry_time_offset_choice(read_for_time_offset(log, as_logged, progress));
     progress.finish();
-    choice = estimate_odometry_time_offset_choice(messages);
   } else if (spec != "off") {
     choice.mode = "given";
     check(CLI::detail::lexical_cast(spec, choice.applied) && std::isfinite(choice.applied),

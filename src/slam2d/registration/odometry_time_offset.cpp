@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -94,18 +95,46 @@ std::optional<SE2> gated_match(const PointCloud2& target, const PointCloud2& sou
   return passes ? std::optional<SE2>(match.T_target_source) : std::nullopt;
 }
 
+// Step 1: the pairs (a, b) of one window, indices into `scans`: (j, j + s) chained from its start.
+std::vector<std::pair<std::size_t, std::size_t>> window_pairs(std::size_t start, std::size_t stride, std::size_t scan_count,
+                                                              const OdometryTimeOffsetConfig& config) {
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t p = 0; p < config.window_pairs; ++p) {
+    const std::size_t a = start + p * stride, b = a + stride;
+    if (b >= scan_count) break;
+    pairs.emplace_back(a, b);
+  }
+  return pairs;
+}
+
+// Step 1 for a log: its laser chain, the scans used, the pair stride and the windows' starts.
+struct Windows {
+  OdometryChain chain;
+  std::vector<std::size_t> scans;  // chain entries
+  std::size_t stride = 1;
+  std::vector<std::size_t> starts;  // into `scans`
+};
+
+Windows plan_windows(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
+  Windows windows;
+  windows.chain = laser_odometry_chain(messages);
+  windows.scans = scan_entries(messages, windows.chain);
+  windows.stride = pair_stride(windows.chain, windows.scans, config.pair_span);
+  windows.starts = window_starts(windows.scans.size(), windows.stride, config);
+  return windows;
+}
+
 // Step 2: the heading pairs of one window, matched along it with a constant-velocity guess.
-void match_window(const std::vector<SensorMessage>& messages, const OdometryChain& chain,
-                  const std::vector<std::size_t>& scans, std::size_t start, std::size_t stride, std::size_t group,
-                  const OdometryTimeOffsetConfig& config, std::vector<HeadingPair>& pairs) {
+void match_window(const std::vector<SensorMessage>& messages, const Windows& windows, std::size_t start,
+                  std::size_t group, const OdometryTimeOffsetConfig& config, std::vector<HeadingPair>& pairs) {
+  const OdometryChain& chain = windows.chain;
+  const std::vector<std::size_t>& scans = windows.scans;
   const auto scan_at = [&](std::size_t i) -> const LaserScan& {
     return std::get<LaserMessage>(messages[chain[scans[i]].message]).scan;
   };
   std::optional<SE2> velocity;  // the last accepted motion per second, in the sensor frame
   PointCloud2 target = usable_cloud(scan_at(start), config);
-  for (std::size_t p = 0; p < config.window_pairs; ++p) {
-    const std::size_t a = start + p * stride, b = a + stride;
-    if (b >= scans.size()) break;
+  for (const auto& [a, b] : window_pairs(start, windows.stride, scans.size(), config)) {
     PointCloud2 source = usable_cloud(scan_at(b), config);
     const double dt = chain[scans[b]].stamp - chain[scans[a]].stamp;
     std::optional<SE2> match;
@@ -199,11 +228,11 @@ double cost_at(const CostCurves& curves, const std::vector<double>& cost, double
 
 OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
   OdometryTimeOffset result;
-  const OdometryChain chain = laser_odometry_chain(messages);
-  const std::vector<std::size_t> scans = scan_entries(messages, chain);
   // Step 1: windows of pairs spread over the log, dealt into the jackknife groups.
-  const std::size_t stride = pair_stride(chain, scans, config.pair_span);
-  const std::vector<std::size_t> starts = window_starts(scans.size(), stride, config);
+  const Windows windows = plan_windows(messages, config);
+  const OdometryChain& chain = windows.chain;
+  const std::vector<std::size_t>& scans = windows.scans;
+  const std::vector<std::size_t>& starts = windows.starts;
   const std::size_t groups = std::min(config.jackknife_groups, starts.size());
   if (groups < 3) {
     result.reason = "too few scans with odometry (" + std::to_string(scans.size()) + ")";
@@ -211,7 +240,7 @@ OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const Od
   }
   // Step 2: the heading change of each pair from the scans alone.
   std::vector<HeadingPair> pairs;
-  for (std::size_t w = 0; w < starts.size(); ++w) match_window(messages, chain, scans, starts[w], stride, w % groups, config, pairs);
+  for (std::size_t w = 0; w < starts.size(); ++w) match_window(messages, windows, starts[w], w % groups, config, pairs);
   result.pairs = pairs.size();
   if (result.pairs < config.min_turning_pairs) {
     result.reason = "too few scan pairs matched: " + std::to_string(result.pairs) + " (scans more than " +
@@ -252,6 +281,22 @@ OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const Od
 }
 
 }  // namespace
+
+std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
+                                                    const OdometryTimeOffsetConfig& config) {
+  validate(config);
+  const Windows windows = plan_windows(messages, config);
+  std::vector<std::size_t> used;
+  for (const std::size_t start : windows.starts) {
+    for (const auto& [a, b] : window_pairs(start, windows.stride, windows.scans.size(), config)) {
+      used.push_back(windows.chain[windows.scans[a]].message);
+      used.push_back(windows.chain[windows.scans[b]].message);
+    }
+  }
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  return used;
+}
 
 OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
                                                  const OdometryTimeOffsetConfig& config) {

@@ -111,4 +111,11 @@ struct OdometryTimeOffset {
 OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
                                                  const OdometryTimeOffsetConfig& config = {});
 
+/// The messages (indices, ascending) whose scans the estimate above matches: of every other laser
+/// message it reads the stamp and odometry pose alone, so a caller reading a long log may keep only
+/// these scans' ranges (slam2d map's `--odometry-time-offset auto` reads a log twice so, instead of
+/// holding all of it).
+std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
+                                                    const OdometryTimeOffsetConfig& config = {});
+
 }  // namespace slam2d
