@@ -384,8 +384,20 @@ SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph, doub
   const auto start = std::chrono::steady_clock::now();
   check_graph(graph);
   if (config_.loop_kernel.type == RobustKernelType::kTls) {
+    // The last decisions by edge, for the edges that are still the graph's first ones (a caller
+    // may take edges back, as graph SLAM does with a refused large correction).
+    std::size_t kept = 0;
+    while (kept < graduated_endpoints_.size() && kept < graph.edges.size() &&
+           graduated_endpoints_[kept] == std::array<int, 2>{graph.edges[kept].from, graph.edges[kept].to}) {
+      ++kept;
+    }
+    graduated_weights_.resize(std::min(kept, graduated_weights_.size()));
     SparsePoseAdjustmentResult result = optimize_graduated(graph, config_, graduated_weights_);
     graduated_weights_ = result.edge_weights;
+    graduated_endpoints_.resize(graph.edges.size());
+    for (std::size_t k = 0; k < graph.edges.size(); ++k) {
+      graduated_endpoints_[k] = {graph.edges[k].from, graph.edges[k].to};
+    }
     return result;
   }
   if (!solver_) solver_ = std::make_unique<Solver>();

@@ -16,6 +16,7 @@
 // and edge pattern are unchanged (only extended graphs re-analyse) and the last damping, so the
 // optimisations after each loop closure of a SLAM run cost little.
 
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -92,6 +93,7 @@ class SparsePoseAdjustment {
   std::unique_ptr<Solver> solver_;
   double lambda_ = 0.0;  // the damping the last optimisation ended with
   std::vector<double> graduated_weights_;  // tls: the last optimisation's decisions, by edge
+  std::vector<std::array<int, 2>> graduated_endpoints_;  // ... and those edges' nodes
 };
 
 /// One-shot optimisation (a fresh SparsePoseAdjustment).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <string>
 
 #include "slam2d/core/covariance.hpp"
@@ -17,6 +18,9 @@
 namespace slam2d {
 
 namespace {
+
+// The sequential and odometry edges join consecutive nodes; every other edge is a loop edge.
+bool loop_edge(const PoseGraphEdge& edge) { return edge.to != edge.from + 1; }
 
 // What a sequential edge keeps of its information when the odometry beside it outvoted it.
 constexpr double kOutvotedWeight = 1e-6;
@@ -193,13 +197,26 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
 }
 
 // Adds the closures' edges; the graph is optimised when one of them closes a loop (a near link
-// only keeps the chain in place).
+// only keeps the chain in place). A confirmed large correction, with check_large_closures, goes in
+// only when the graph optimised with it keeps the loop edges it held (large_closure_consistent,
+// which adds its edges and optimises).
 int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final) {
+  const auto checked = [&](const LoopClosure& closure) {
+    return config_.check_large_closures && !closure.near() && !closure.edge.robust;
+  };
+  std::vector<LoopClosure> large;
+  std::copy_if(closures.begin(), closures.end(), std::back_inserter(large), checked);
+  const bool large_added = !large.empty() && large_closure_consistent(large);
+  if (!large.empty() && !large_added) ++stats_.rejected_large_closures;
   bool loop_closed = false;
   bool new_loop = false;
   for (const LoopClosure& closure : closures) {
-    if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
-    graph_.edges.push_back(closure.edge);
+    if (checked(closure) && !large_added) continue;
+    if (!checked(closure)) {
+      if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
+      graph_.edges.push_back(closure.edge);
+      loop_closed = loop_closed || !closure.near();
+    }
     keyframes_[closure.keyframe].loop_anchors.push_back(closure.anchor);
     if (closure.near()) {
       ++stats_.near_links;
@@ -207,7 +224,6 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     }
     ++stats_.loop_closures;
     if (final) ++stats_.final_search_closures;
-    loop_closed = true;
   }
   if (loop_closed) {
     if (!config_.defer_agreeing_closures || new_loop || estimate_disagrees()) {
@@ -220,6 +236,35 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     for (const LoopClosure& closure : closures) recheck_near(closure.keyframe);
   }
   return static_cast<int>(closures.size());
+}
+
+// A large correction goes in without the robust kernel, so a wrong one (a repeated structure
+// matched the same wrong way twice) bends the map by metres, and the loop edges already there give
+// way under their kernel. It is checked against them, as the largest mutually consistent set of
+// closures wins in PCM: the graph is optimised without it (when closures wait), then with it; the
+// loop edges that agreed with the first optimum (e^T Omega e within chi-square's quantile, 3 dof,
+// at optimize_gate_z) and no longer agree with the second are the closures it refutes. When they
+// outnumber its own edges it is refused: its edges leave and the poses return to the first optimum.
+bool GraphSlam::large_closure_consistent(const std::vector<LoopClosure>& large) {
+  if (first_unoptimized_edge_ < graph_.edges.size()) optimize(config_.run_relative_tolerance);
+  const double gate = chi_square_quantile(3.0, config_.optimize_gate_z);
+  const std::size_t edges = graph_.edges.size();
+  std::vector<std::size_t> agreeing;  // the loop edges within the gate at the first optimum
+  for (std::size_t k = 0; k < edges; ++k) {
+    const PoseGraphEdge& edge = graph_.edges[k];
+    if (loop_edge(edge) && squared_error(edge, graph_.poses) <= gate) agreeing.push_back(k);
+  }
+  const std::vector<SE2> poses = graph_.poses;
+  for (const LoopClosure& closure : large) graph_.edges.push_back(closure.edge);
+  optimize(config_.back_end.relative_tolerance);  // it moves poses by metres: to convergence
+  const auto refuted = static_cast<std::size_t>(std::count_if(agreeing.begin(), agreeing.end(), [&](std::size_t k) {
+    return squared_error(graph_.edges[k], graph_.poses) > gate;
+  }));
+  if (refuted <= large.size()) return true;
+  graph_.edges.resize(edges);
+  graph_.poses = poses;
+  first_unoptimized_edge_ = edges;
+  return false;
 }
 
 namespace {
@@ -307,8 +352,9 @@ int GraphSlam::close_loops(std::size_t current, bool final) {
   const auto started = std::chrono::steady_clock::now();
   const std::vector<LoopClosure> closures = loop_closer_.close(keyframes_, graph_, current, final);
   stats_.loop_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const int added = add_closures(closures, final);
   copy_loop_stats();
-  return add_closures(closures, final);
+  return added;
 }
 
 void GraphSlam::copy_loop_stats() {
@@ -316,7 +362,7 @@ void GraphSlam::copy_loop_stats() {
   stats_.loop_attempts = loops.attempts;
   stats_.global_searches = loops.global_searches;
   stats_.global_closures = loops.global_closures;
-  stats_.large_closures = loops.large_closures;
+  stats_.large_closures = loops.large_closures - stats_.rejected_large_closures;
   stats_.unconfirmed_closures = loops.unconfirmed;
   stats_.global_search_seconds = loops.global_seconds;
   stats_.held_replaced = loops.held_replaced;
@@ -338,7 +384,7 @@ bool GraphSlam::estimate_disagrees() const {
   double loop_edges = 0.0;
   for (std::size_t k = first_unoptimized_edge_; k < graph_.edges.size(); ++k) {
     const PoseGraphEdge& edge = graph_.edges[k];
-    if (edge.to != edge.from + 1) {  // a loop edge: the sequential and odometry edges join consecutive nodes
+    if (loop_edge(edge)) {
       sum += squared_error(edge, graph_.poses);
       loop_edges += 1.0;
     }

@@ -30,9 +30,9 @@
 //    threshold after a fine refinement; when the drift between the keyframe and a chain (a drift
 //    model of the distance travelled and the angle turned along the graph's path between them)
 //    outgrows that window, a global search over the whole drift; a large correction is confirmed
-//    by a second keyframe before it goes in; a local closure is held back while later searches
-//    keep matching the same chain, replaced by a better one, and goes in when they stop
-//    (loop_closure.hpp);
+//    by a second keyframe and checked against the closures already there before it goes in; a
+//    local closure is held back while later searches keep matching the same chain, replaced by a
+//    better one, and goes in when they stop (loop_closure.hpp);
 // 4. back end: sparse pose adjustment (optim/sparse_pose_adjustment.hpp), warm-started, after a
 //    closure that closes a new loop or when the closures not yet optimised disagree with the
 //    estimate (a revisit of a place closed before waits: defer_agreeing_closures), and at the end;
@@ -112,6 +112,11 @@ struct GraphSlamConfig {
   // fraction (the front end reads their poses to a centimetre); finish()'s final one at
   // back_end.relative_tolerance.
   double run_relative_tolerance = 1e-4;
+  // A confirmed large correction goes in without the kernel. It is refused when the graph,
+  // optimised with it, no longer agrees (e^T Omega e within chi-square's quantile, 3 dof, at
+  // optimize_gate_z) with more of the loop edges that agreed before than its own two: the larger
+  // mutually consistent set of closures wins (PCM's rule). false: it always goes in.
+  bool check_large_closures = true;
   double map_resolution = 0.05;
 };
 
@@ -139,6 +144,8 @@ void describe(Fields& f, GraphSlamConfig& c) {
            "... beyond chi-square's quantile (3 dof an edge) at this standard normal quantile");
   f.number("run_relative_tolerance", c.run_relative_tolerance, "1", at_least(0),
            "the back end's relative_tolerance during the run (finish(): back_end.relative_tolerance)");
+  f.flag("check_large_closures", c.check_large_closures,
+         "a confirmed large correction goes in only if the loop edges already there agree with it (optimize_gate_z)");
   f.number("map_resolution", c.map_resolution, "m per cell", greater_than(0), "of the occupancy map built from the keyframes");
 }
 
@@ -160,8 +167,9 @@ struct GraphSlamStats {
   std::size_t loop_attempts = 0;        // chains searched over the large window
   std::size_t global_searches = 0;      // searches over the whole drift uncertainty
   std::size_t global_closures = 0;      // closures first found by a global search and confirmed
-  std::size_t large_closures = 0;       // large corrections confirmed (each adds two loop edges)
+  std::size_t large_closures = 0;       // large corrections confirmed and added (each adds two loop edges)
   std::size_t unconfirmed_closures = 0; // large corrections dropped for want of a confirmation
+  std::size_t rejected_large_closures = 0;  // confirmed large corrections refused: they refuted more loop edges
   std::size_t final_search_closures = 0;  // loop edges added by finish()
   std::size_t held_replaced = 0;        // delayed: held closures replaced by a better one of the same chain
   std::size_t held_dropped = 0;         // delayed: closures dropped for a better one held to the same chain
@@ -240,6 +248,7 @@ class GraphSlam {
   void optimize(double relative_tolerance);
   bool closes_new_loop(const PoseGraphEdge& edge) const;
   bool estimate_disagrees() const;
+  bool large_closure_consistent(const std::vector<LoopClosure>& large);
   SE2 current_pose() const;
   SE2 interpolated_pose(const ScanRecord& record) const;
 
