@@ -198,20 +198,25 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
 
 // Adds the closures' edges; the graph is optimised when one of them closes a loop (a near link
 // only keeps the chain in place). A confirmed large correction, with check_large_closures, goes in
-// only when the graph optimised with it keeps the loop edges it held (large_closure_consistent,
-// which adds its edges and optimises).
+// only when the closures that agree with it are at least as many as those it refutes
+// (supported_large_closures, which adds the edges and optimises); refused, it is remembered, and
+// goes in later with the large corrections that agree with it.
 int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final) {
   const auto checked = [&](const LoopClosure& closure) {
     return config_.check_large_closures && !closure.near() && !closure.edge.robust;
   };
   std::vector<LoopClosure> large;
   std::copy_if(closures.begin(), closures.end(), std::back_inserter(large), checked);
-  const bool large_added = !large.empty() && large_closure_consistent(large);
-  if (!large.empty() && !large_added) ++stats_.rejected_large_closures;
+  const std::vector<LoopClosure> large_added = large.empty() ? large : supported_large_closures(large);
+  const bool new_large_added = !large_added.empty();
+  for (std::size_t k = large.size(); k < large_added.size(); ++k) {  // remembered ones that went in with it
+    keyframes_[large_added[k].keyframe].loop_anchors.push_back(large_added[k].anchor);
+    ++stats_.loop_closures;
+  }
   bool loop_closed = false;
   bool new_loop = false;
   for (const LoopClosure& closure : closures) {
-    if (checked(closure) && !large_added) continue;
+    if (checked(closure) && !new_large_added) continue;
     if (!checked(closure)) {
       if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
       graph_.edges.push_back(closure.edge);
@@ -240,12 +245,15 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
 
 // A large correction goes in without the robust kernel, so a wrong one (a repeated structure
 // matched the same wrong way twice) bends the map by metres, and the loop edges already there give
-// way under their kernel. It is checked against them, as the largest mutually consistent set of
-// closures wins in PCM: the graph is optimised without it (when closures wait), then with it; the
-// loop edges that agreed with the first optimum (e^T Omega e within chi-square's quantile, 3 dof,
-// at optimize_gate_z) and no longer agree with the second are the closures it refutes. When they
-// outnumber its own edges it is refused: its edges leave and the poses return to the first optimum.
-bool GraphSlam::large_closure_consistent(const std::vector<LoopClosure>& large) {
+// way under their kernel. As in PCM, the larger mutually consistent set of closures wins: the graph
+// is optimised without it (when closures wait), then with it and the large corrections refused
+// before (they agree with it when the optimum keeps both their edges within the gate; those that do
+// not are taken out and it is optimised again). A loop edge within the gate (e^T Omega e within
+// chi-square's quantile, 3 dof, at optimize_gate_z) at the first optimum and beyond it at the second
+// refutes it. When the refuting edges outnumber the agreeing large corrections' edges, the new one
+// is refused and remembered (the last kRememberedRefusals), its edges leave and the poses return to
+// the first optimum. Returns the closures that went in: the new ones first, then the remembered.
+std::vector<LoopClosure> GraphSlam::supported_large_closures(const std::vector<LoopClosure>& large) {
   if (first_unoptimized_edge_ < graph_.edges.size()) optimize(config_.run_relative_tolerance);
   const double gate = chi_square_quantile(3.0, config_.optimize_gate_z);
   const std::size_t edges = graph_.edges.size();
@@ -255,16 +263,52 @@ bool GraphSlam::large_closure_consistent(const std::vector<LoopClosure>& large) 
     if (loop_edge(edge) && squared_error(edge, graph_.poses) <= gate) agreeing.push_back(k);
   }
   const std::vector<SE2> poses = graph_.poses;
-  for (const LoopClosure& closure : large) graph_.edges.push_back(closure.edge);
-  optimize(config_.back_end.relative_tolerance);  // it moves poses by metres: to convergence
-  const auto refuted = static_cast<std::size_t>(std::count_if(agreeing.begin(), agreeing.end(), [&](std::size_t k) {
-    return squared_error(graph_.edges[k], graph_.poses) > gate;
-  }));
-  if (refuted <= large.size()) return true;
+  std::vector<bool> supporting(refused_large_.size(), true);  // the remembered pairs tried with it
+  const auto optimize_with = [&] {
+    graph_.edges.resize(edges);
+    graph_.poses = poses;
+    for (const LoopClosure& closure : large) graph_.edges.push_back(closure.edge);
+    for (std::size_t r = 0; r < refused_large_.size(); ++r) {
+      if (!supporting[r]) continue;
+      for (const LoopClosure& closure : refused_large_[r]) graph_.edges.push_back(closure.edge);
+    }
+    optimize(config_.back_end.relative_tolerance);  // it moves poses by metres: to convergence
+  };
+  optimize_with();
+  bool dropped = false;
+  for (std::size_t r = 0; r < refused_large_.size(); ++r) {
+    supporting[r] = std::all_of(refused_large_[r].begin(), refused_large_[r].end(), [&](const LoopClosure& closure) {
+      return squared_error(closure.edge, graph_.poses) <= gate;
+    });
+    dropped = dropped || !supporting[r];
+  }
+  if (dropped) optimize_with();
+  std::size_t support = large.size();
+  for (std::size_t r = 0; r < refused_large_.size(); ++r) support += supporting[r] ? refused_large_[r].size() : 0;
+  const auto refuted = static_cast<std::size_t>(std::count_if(
+      agreeing.begin(), agreeing.end(), [&](std::size_t k) { return squared_error(graph_.edges[k], graph_.poses) > gate; }));
+  std::vector<LoopClosure> added;
+  if (refuted <= support) {
+    added = large;
+    std::vector<std::vector<LoopClosure>> still_refused;
+    for (std::size_t r = 0; r < refused_large_.size(); ++r) {
+      if (!supporting[r]) {
+        still_refused.push_back(std::move(refused_large_[r]));
+        continue;
+      }
+      added.insert(added.end(), refused_large_[r].begin(), refused_large_[r].end());
+      --stats_.rejected_large_closures;
+    }
+    refused_large_ = std::move(still_refused);
+    return added;
+  }
   graph_.edges.resize(edges);
   graph_.poses = poses;
   first_unoptimized_edge_ = edges;
-  return false;
+  refused_large_.push_back(large);
+  if (refused_large_.size() > kRememberedRefusals) refused_large_.erase(refused_large_.begin());
+  ++stats_.rejected_large_closures;
+  return added;
 }
 
 namespace {

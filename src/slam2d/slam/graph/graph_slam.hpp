@@ -113,9 +113,11 @@ struct GraphSlamConfig {
   // back_end.relative_tolerance.
   double run_relative_tolerance = 1e-4;
   // A confirmed large correction goes in without the kernel. It is refused when the graph,
-  // optimised with it, no longer agrees (e^T Omega e within chi-square's quantile, 3 dof, at
-  // optimize_gate_z) with more of the loop edges that agreed before than its own two: the larger
-  // mutually consistent set of closures wins (PCM's rule). false: it always goes in.
+  // optimised with it (and with the refused ones that agree with it), no longer agrees (e^T Omega e
+  // within chi-square's quantile, 3 dof, at optimize_gate_z) with more of the loop edges that agreed
+  // before than it and those bring: the larger mutually consistent set of closures wins (PCM's
+  // rule). A refused one is remembered and goes in with a later one it agrees with. false: it always
+  // goes in.
   bool check_large_closures = true;
   double map_resolution = 0.05;
 };
@@ -169,7 +171,7 @@ struct GraphSlamStats {
   std::size_t global_closures = 0;      // closures first found by a global search and confirmed
   std::size_t large_closures = 0;       // large corrections confirmed and added (each adds two loop edges)
   std::size_t unconfirmed_closures = 0; // large corrections dropped for want of a confirmation
-  std::size_t rejected_large_closures = 0;  // confirmed large corrections refused: they refuted more loop edges
+  std::size_t rejected_large_closures = 0;  // confirmed large corrections refused (and not gone in later)
   std::size_t final_search_closures = 0;  // loop edges added by finish()
   std::size_t held_replaced = 0;        // delayed: held closures replaced by a better one of the same chain
   std::size_t held_dropped = 0;         // delayed: closures dropped for a better one held to the same chain
@@ -248,7 +250,7 @@ class GraphSlam {
   void optimize(double relative_tolerance);
   bool closes_new_loop(const PoseGraphEdge& edge) const;
   bool estimate_disagrees() const;
-  bool large_closure_consistent(const std::vector<LoopClosure>& large);
+  std::vector<LoopClosure> supported_large_closures(const std::vector<LoopClosure>& large);
   SE2 current_pose() const;
   SE2 interpolated_pose(const ScanRecord& record) const;
 
@@ -269,6 +271,10 @@ class GraphSlam {
   SE2 odometry_since_keyframe_;       // the odometry's increments since the last keyframe, composed
   bool odometry_intact_ = false;      // ... all trusted by the guard (and odometry came)
   std::size_t first_unoptimized_edge_ = 0;  // the edges from here on came after the last optimisation
+  // Large corrections refused (check_large_closures), each a confirmed pair, the newest last; one
+  // goes in later when a new large correction it agrees with does.
+  static constexpr std::size_t kRememberedRefusals = 8;
+  std::vector<std::vector<LoopClosure>> refused_large_;
 };
 
 }  // namespace slam2d
