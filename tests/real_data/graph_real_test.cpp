@@ -6,7 +6,7 @@
 // about 3.6 m off, to a corridor it mapped 560 s before. Intel and FR079 take 8-11 s
 // each and are left to the dataset benchmark, but for FR079 mapped twice (with and without the
 // back end's deferral) and, with mixed pixels, twice more (with and without the check of large
-// corrections).
+// corrections), and for Intel without odometry once (the check's memory of refused corrections).
 
 #include <gtest/gtest.h>
 
