@@ -280,6 +280,12 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
                                        "were left out; a loop may be left open",
                                        stats.unconfirmed_closures));
   }
+  if (stats.rejected_large_closures > 0) {  // the same: a loop left open rather than one closed wrong
+    run.warnings.push_back(fmt::format("graph: {} large loop corrections were refused: each contradicted more loop "
+                                       "closures already in the graph than agreed with it (a repeated structure, or a "
+                                       "loop left open)",
+                                       stats.rejected_large_closures));
+  }
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("optimization_iterations", stats.optimization_iterations)
       .add("deferred_optimizations", stats.deferred_optimizations);
