@@ -94,6 +94,11 @@ TEST(Proposal, MotionDensityIsANormalisedGaussian) {
   const Eigen::Vector3d moved = motion_sigmas(SE2(1.0, 0.0, 0.5), noise);
   EXPECT_NEAR(moved.x(), noise.srr * 1.0 + noise.srt * 0.5, 1e-12);
   EXPECT_NEAR(moved.z(), noise.str * 1.0 + noise.stt * 0.5, 1e-12);
+  // ... nor rise above the caps: a 40 m step over a gap in the scans spreads as a 2 m one.
+  EXPECT_EQ(motion_sigmas(SE2(40.0, 3.0, 2.5), noise), Eigen::Vector3d(noise.max_sigma_translation,
+                                                                      noise.max_sigma_translation,
+                                                                      noise.max_sigma_rotation));
+  EXPECT_EQ(motion_sigmas(SE2(40.0, 3.0, 2.5), noise), motion_sigmas(SE2(2.0, 0.0, 0.0), noise));
 }
 
 // A noiseless laser, odometry with only a systematic drift: one particle's filter is scan
@@ -318,6 +323,9 @@ TEST(RbpfSlam, RejectsBadConfiguration) {
   EXPECT_THROW(RbpfSlam{config}, Error);
   config = {};
   config.motion.min_sigma_rotation = 0.0;
+  EXPECT_THROW(RbpfSlam{config}, Error);
+  config = {};
+  config.motion.max_sigma_translation = 0.5 * config.motion.min_sigma_translation;  // a cap under its floor
   EXPECT_THROW(RbpfSlam{config}, Error);
   config = {};
   config.proposal.likelihood_stride = 0;

@@ -2,6 +2,7 @@
 #include "slam2d/slam/rbpf/proposal.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -50,7 +51,11 @@ const LogisticTable kLogistic;
 
 }  // namespace
 
-void validate(const RbpfMotionNoise& noise) { check_fields(noise, "RbpfMotionNoise"); }
+void validate(const RbpfMotionNoise& noise) {
+  check_fields(noise, "RbpfMotionNoise");
+  check(noise.max_sigma_translation >= noise.min_sigma_translation && noise.max_sigma_rotation >= noise.min_sigma_rotation,
+        "RbpfMotionNoise: max_sigma_translation and max_sigma_rotation must be at least their floors");
+}
 
 void validate(const RbpfProposalConfig& config) {
   check_fields(config, "RbpfProposalConfig");
@@ -60,8 +65,8 @@ void validate(const RbpfProposalConfig& config) {
 Eigen::Vector3d motion_sigmas(const SE2& u, const RbpfMotionNoise& noise) {
   const double d = u.translation().norm();
   const double a = std::abs(normalize_angle(u.theta()));
-  const double sigma_t = std::max(noise.min_sigma_translation, noise.srr * d + noise.srt * a);
-  const double sigma_r = std::max(noise.min_sigma_rotation, noise.str * d + noise.stt * a);
+  const double sigma_t = std::clamp(noise.srr * d + noise.srt * a, noise.min_sigma_translation, noise.max_sigma_translation);
+  const double sigma_r = std::clamp(noise.str * d + noise.stt * a, noise.min_sigma_rotation, noise.max_sigma_rotation);
   return {sigma_t, sigma_t, sigma_r};
 }
 

@@ -61,6 +61,7 @@ void validate(const RbpfConfig& config) {
   check(config.max_range > config.min_range, "RbpfConfig: max_range must be > min_range");
   validate(scan_odometry_matching(config).matcher);  // the rotation search's number of starts
   validate(config.proposal);
+  validate(config.motion);
   validate(config.scan_odometry_noise);
 }
 
