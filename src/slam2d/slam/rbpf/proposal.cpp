@@ -65,9 +65,14 @@ void validate(const RbpfProposalConfig& config) {
 Eigen::Vector3d motion_sigmas(const SE2& u, const RbpfMotionNoise& noise) {
   const double d = u.translation().norm();
   const double a = std::abs(normalize_angle(u.theta()));
-  const double sigma_t = std::clamp(noise.srr * d + noise.srt * a, noise.min_sigma_translation, noise.max_sigma_translation);
-  const double sigma_r = std::clamp(noise.str * d + noise.stt * a, noise.min_sigma_rotation, noise.max_sigma_rotation);
+  const double sigma_t = std::max(noise.min_sigma_translation, noise.srr * d + noise.srt * a);
+  const double sigma_r = std::max(noise.min_sigma_rotation, noise.str * d + noise.stt * a);
   return {sigma_t, sigma_t, sigma_r};
+}
+
+Eigen::Vector3d update_sigmas(const SE2& u, const RbpfMotionNoise& noise) {
+  const Eigen::Vector3d caps(noise.max_sigma_translation, noise.max_sigma_translation, noise.max_sigma_rotation);
+  return motion_sigmas(u, noise).cwiseMin(caps);
 }
 
 double log_motion_density(const SE2& x, const SE2& predicted, const Eigen::Vector3d& sigmas) {

@@ -115,7 +115,7 @@ bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
   RbpfParticle& particle = particles_[i];
   Rng rng = stream(config_.seed, stats_.updates, i);
   SE2 predicted = particle.T_map_robot * u;
-  const Eigen::Vector3d sigmas = motion_sigmas(u, config_.motion);
+  const Eigen::Vector3d sigmas = update_sigmas(u, config_.motion);
   if (config_.start_noise > 0.0 && stats_.updates > 1) {
     // GMapping's drawFromMotion before the scan matching: each particle starts its match from its
     // own draw of the motion model, so the particles explore different poses and one of them can
