@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <span>
 #include <string>
 
 #include "slam2d/core/covariance.hpp"
@@ -209,10 +210,10 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   std::copy_if(closures.begin(), closures.end(), std::back_inserter(large), checked);
   const std::vector<LoopClosure> large_added = large.empty() ? large : supported_large_closures(large);
   const bool new_large_added = !large_added.empty();
-  for (std::size_t k = large.size(); k < large_added.size(); ++k) {  // remembered ones that went in with it
-    keyframes_[large_added[k].keyframe].loop_anchors.push_back(large_added[k].anchor);
-    ++stats_.loop_closures;
-  }
+  // The remembered ones that went in with them follow the new ones (none when those were refused).
+  const std::span<const LoopClosure> remembered_added =
+      new_large_added ? std::span<const LoopClosure>(large_added).subspan(large.size()) : std::span<const LoopClosure>();
+  for (const LoopClosure& closure : remembered_added) record_closure(closure, false);
   bool loop_closed = false;
   bool new_loop = false;
   for (const LoopClosure& closure : closures) {
@@ -222,13 +223,7 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
       graph_.edges.push_back(closure.edge);
       loop_closed = loop_closed || !closure.near();
     }
-    keyframes_[closure.keyframe].loop_anchors.push_back(closure.anchor);
-    if (closure.near()) {
-      ++stats_.near_links;
-      continue;
-    }
-    ++stats_.loop_closures;
-    if (final) ++stats_.final_search_closures;
+    record_closure(closure, final);
   }
   if (loop_closed) {
     if (!config_.defer_agreeing_closures || new_loop || estimate_disagrees()) {
@@ -239,8 +234,21 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   }
   if (lifelong()) {
     for (const LoopClosure& closure : closures) recheck_near(closure.keyframe);
+    for (const LoopClosure& closure : remembered_added) recheck_near(closure.keyframe);
   }
   return static_cast<int>(closures.size());
+}
+
+// A closure that went in: its anchor kept on its keyframe (what the lifelong budget's release
+// checks), and counted (a closure of the final search as such too).
+void GraphSlam::record_closure(const LoopClosure& closure, bool final) {
+  keyframes_[closure.keyframe].loop_anchors.push_back(closure.anchor);
+  if (closure.near()) {
+    ++stats_.near_links;
+    return;
+  }
+  ++stats_.loop_closures;
+  if (final) ++stats_.final_search_closures;
 }
 
 // A large correction goes in without the robust kernel, so a wrong one (a repeated structure

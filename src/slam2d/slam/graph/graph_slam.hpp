@@ -237,6 +237,7 @@ class GraphSlam {
   void add_odometry_edge(PoseGraphEdge& sequential);
   int close_loops(std::size_t current, bool final);
   int add_closures(const std::vector<LoopClosure>& closures, bool final);
+  void record_closure(const LoopClosure& closure, bool final);
   bool lifelong() const { return config_.keyframes.redundant_radius > 0.0; }
   // How far along the graph a loop edge links a keyframe to an older one: twice the recent chain
   // (delayed closure adds one edge per chain passed, 8-18 m apart on the simulated ring).
