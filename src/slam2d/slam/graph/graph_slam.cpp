@@ -23,6 +23,12 @@ namespace {
 // The sequential and odometry edges join consecutive nodes; every other edge is a loop edge.
 bool loop_edge(const PoseGraphEdge& edge) { return edge.to != edge.from + 1; }
 
+// Whether a global search found one of these closures (a large correction and its confirmation).
+bool found_globally(const std::vector<LoopClosure>& closures) {
+  return std::any_of(closures.begin(), closures.end(),
+                     [](const LoopClosure& closure) { return closure.search == LoopSearch::kGlobal; });
+}
+
 // What a sequential edge keeps of its information when the odometry beside it outvoted it.
 constexpr double kOutvotedWeight = 1e-6;
 
@@ -306,6 +312,7 @@ std::vector<LoopClosure> GraphSlam::supported_large_closures(const std::vector<L
       }
       added.insert(added.end(), refused_large_[r].begin(), refused_large_[r].end());
       --stats_.rejected_large_closures;
+      if (found_globally(refused_large_[r])) --refused_global_closures_;
     }
     refused_large_ = std::move(still_refused);
     return added;
@@ -316,6 +323,7 @@ std::vector<LoopClosure> GraphSlam::supported_large_closures(const std::vector<L
   refused_large_.push_back(large);
   if (refused_large_.size() > kRememberedRefusals) refused_large_.erase(refused_large_.begin());
   ++stats_.rejected_large_closures;
+  if (found_globally(large)) ++refused_global_closures_;
   return added;
 }
 
@@ -413,7 +421,7 @@ void GraphSlam::copy_loop_stats() {
   const LoopCloserStats& loops = loop_closer_.stats();
   stats_.loop_attempts = loops.attempts;
   stats_.global_searches = loops.global_searches;
-  stats_.global_closures = loops.global_closures;
+  stats_.global_closures = loops.global_closures - refused_global_closures_;
   stats_.large_closures = loops.large_closures - stats_.rejected_large_closures;
   stats_.unconfirmed_closures = loops.unconfirmed;
   stats_.global_search_seconds = loops.global_seconds;

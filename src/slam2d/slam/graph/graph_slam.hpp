@@ -168,7 +168,7 @@ struct GraphSlamStats {
   std::size_t near_links = 0;           // loop edges to near chains (small window)
   std::size_t loop_attempts = 0;        // chains searched over the large window
   std::size_t global_searches = 0;      // searches over the whole drift uncertainty
-  std::size_t global_closures = 0;      // closures first found by a global search and confirmed
+  std::size_t global_closures = 0;      // closures first found by a global search, confirmed and gone in
   std::size_t large_closures = 0;       // large corrections confirmed and added (each adds two loop edges)
   std::size_t unconfirmed_closures = 0; // large corrections dropped for want of a confirmation
   std::size_t rejected_large_closures = 0;  // confirmed large corrections refused (and not gone in later)
@@ -276,6 +276,7 @@ class GraphSlam {
   // goes in later when a new large correction it agrees with does.
   static constexpr std::size_t kRememberedRefusals = 8;
   std::vector<std::vector<LoopClosure>> refused_large_;
+  std::size_t refused_global_closures_ = 0;  // of the refused ones, those a global search found
 };
 
 }  // namespace slam2d
