@@ -46,7 +46,7 @@ void describe(Fields& f, SparsePoseAdjustmentConfig& c) {
   f.number("lambda_up", c.lambda_up, "1", greater_than(1), "factor on a rejected step");
   f.number("lambda_down", c.lambda_down, "1", open_interval(0, 1), "factor on an accepted step");
   f.number("relative_tolerance", c.relative_tolerance, "1", at_least(0),
-           "converged when an accepted step lowers the cost by less than this fraction");
+           "converged when a step changes the cost by less than this fraction (a rejected one too: rounding at the minimum)");
   f.number("step_tolerance", c.step_tolerance, "m and rad", at_least(0),
            "converged when a step moves no coordinate by more than this");
   f.section("loop_kernel", c.loop_kernel, "for edges with robust = true (none: plain least squares)");

@@ -108,7 +108,7 @@ struct GraphSlamConfig {
   // see; finish() always optimises. false: after every closure (Karto's schedule).
   bool defer_agreeing_closures = true;
   double optimize_gate_z = 3.09;
-  // The optimisations during the run stop when an accepted step lowers the cost by less than this
+  // The optimisations during the run stop when a step changes the cost by less than this
   // fraction (the front end reads their poses to a centimetre); finish()'s final one at
   // back_end.relative_tolerance.
   double run_relative_tolerance = 1e-4;
