@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <variant>
@@ -126,6 +127,46 @@ TEST(GraphPaths, FollowTheShortestWayAndCountTheTurns) {
   const std::vector<GraphPath> bounded = graph_paths(graph, 4, 5.0);
   EXPECT_TRUE(std::isinf(bounded[2].distance));
   EXPECT_EQ(nodes_within_graph_distance(graph, 4, 5.0), (std::vector<bool>{true, false, false, false, true}));
+}
+
+// A gap in the scans between nodes 1 and 2 of a straight line of 10 m steps: the step across it
+// counts the drift the odometry may have gathered over the gap (gap_steps: the travel that the
+// drift model turns into it), not the edge's own 10 m; unknown, it joins nothing.
+TEST(GraphPaths, AStepAcrossAGapCountsTheOdometrysDriftOverIt) {
+  PoseGraph graph;
+  std::vector<Keyframe> keyframes(4);
+  for (int i = 0; i < 4; ++i) {
+    graph.poses.push_back(SE2(10.0 * i, 0.0, 0.0));
+    keyframes[static_cast<std::size_t>(i)].node = static_cast<std::size_t>(i);
+    if (i == 0) continue;
+    PoseGraphEdge edge;
+    edge.from = i - 1;
+    edge.to = i;
+    edge.T_from_to = SE2(10.0, 0.0, 0.0);
+    graph.edges.push_back(edge);
+  }
+  const DriftModel model;
+  keyframes[2].after_gap = true;
+  keyframes[2].gap_drift_translation = 2.0;  // m
+  keyframes[2].gap_drift_rotation = 0.5;     // rad
+  const std::vector<std::optional<GraphPath>> steps = gap_steps(keyframes, graph.size(), model);
+  ASSERT_TRUE(steps[2].has_value());
+  EXPECT_FALSE(steps[1].has_value());
+  const std::vector<GraphPath> paths = graph_paths(graph, 3, std::numeric_limits<double>::infinity(), &steps);
+  EXPECT_DOUBLE_EQ(paths[2].distance, 10.0);
+  const Drift across = drift_along(paths[1], model);  // 10 m of tracking and the gap
+  EXPECT_NEAR(across.translation, 2.0 + 10.0 * model.translation_per_metre, 1e-9);
+  EXPECT_NEAR(across.rotation, 0.5 + 10.0 * model.rotation_per_metre, 1e-9);
+  EXPECT_GT(drift_along(paths[0], model).translation, across.translation);
+  EXPECT_EQ(nodes_within_graph_distance(graph, 3, 25.0, &steps), (std::vector<bool>{false, false, true, true}));
+  EXPECT_EQ(nodes_within_graph_distance(graph, 3, 25.0), (std::vector<bool>{false, true, true, true}));
+
+  keyframes[2].gap_drift_translation = std::numeric_limits<double>::infinity();  // nothing told it
+  const std::vector<std::optional<GraphPath>> unknown = gap_steps(keyframes, graph.size(), model);
+  const std::vector<GraphPath> cut = graph_paths(graph, 3, std::numeric_limits<double>::infinity(), &unknown);
+  EXPECT_TRUE(std::isinf(cut[1].distance));
+  EXPECT_TRUE(std::isinf(drift_along(cut[0], model).translation));
+  EXPECT_TRUE(std::isinf(drift_along(cut[0], model).rotation));
 }
 
 // The robot comes back to its start at the end of the log, 2 m off (the odometry carried it

@@ -266,6 +266,36 @@ TEST(HectorSlam, KeepsItsHeadingThroughScansTheMapCannotExplain) {
   }
 }
 
+// After a gap the odometry may be metres and a radian off (here every odometry pose after scan 150
+// is moved by 3 m and 1 rad): restart_map() places the next scan at its prediction without
+// matching it against the old map, and the scans after it are tracked against the new map alone.
+TEST(HectorSlam, RestartsItsMapAndTracksOnTheNewOne) {
+  const SimulatedRun& run = office_run();
+  const auto scans = laser_messages(run);
+  ASSERT_GT(scans.size(), 350u);
+  const SE2 shift(3.0, -2.0, 1.0);
+  HectorSlam slam;
+  for (std::size_t i = 0; i < 150; ++i) slam.add_scan(scans[i]->scan, {.T_odom_robot = scans[i]->odom_pose});
+  const std::size_t updates = slam.map_updates();
+  slam.restart_map();
+  Trajectory after;
+  Trajectory truth;
+  for (std::size_t i = 150; i < 350; ++i) {
+    const HectorStep step = slam.add_scan(scans[i]->scan, {.T_odom_robot = shift * scans[i]->odom_pose});
+    if (i == 150) {
+      EXPECT_FALSE(step.matched);
+      EXPECT_TRUE(step.map_updated);
+      EXPECT_EQ(step.T_map_robot, step.prediction);
+      EXPECT_EQ(slam.map_updates(), updates + 1);
+    } else {
+      EXPECT_TRUE(step.matched);
+    }
+    after.push_back(scans[i]->scan.stamp, step.T_map_robot);
+    truth.push_back(run.truth[i].stamp, run.truth[i].pose);
+  }
+  EXPECT_LT(absolute_trajectory_error(after, truth).rmse, 0.05);  // in its own frame: the motion is right
+}
+
 TEST(HectorSlam, IsDeterministic) {
   const auto scans = laser_messages(office_run());
   HectorSlam a, b;

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <limits>
+#include <numbers>
 #include <span>
 #include <string>
 
@@ -100,16 +102,35 @@ HectorStep GraphSlam::track(const LaserScan& scan, const std::optional<SE2>& T_o
   return tracker_->add_scan(scan, inputs);
 }
 
+// Whether this scan ends a gap in the scans (gap_seconds, gap_periods); the typical interval learns
+// from the others.
+bool GraphSlam::ends_gap(double stamp) {
+  if (scans_.empty()) return false;
+  const double interval = stamp - scans_.back().stamp;
+  if (interval > std::max(config_.gap_seconds, config_.gap_periods * typical_interval_)) return true;
+  constexpr double kIntervalRate = 0.05;  // the running mean's weight of one interval
+  if (interval > 0.0) {
+    typical_interval_ = typical_interval_ > 0.0 ? typical_interval_ + kIntervalRate * (interval - typical_interval_)
+                                                : interval;
+  }
+  return false;
+}
+
 GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
   GraphSlamStep step;
+  const double gap = ends_gap(scan.stamp) ? scan.stamp - scans_.back().stamp : 0.0;
+  if (gap > 0.0 && tracker_) {
+    tracker_->restart_map();
+    ++stats_.gaps;
+  }
   const HectorStep tracked = track(scan, T_odom_robot);
   const bool first = keyframes_.empty();
   // The tracked motion since the last keyframe, carried from its (optimised) graph pose.
   const SE2 estimate = first ? SE2() : graph_.poses[keyframes_.back().node] * T_tracker_keyframe_.between(tracked.T_map_robot);
   step.matched = tracked.matched && !tracked.match.degenerate;
   accumulate_odometry(tracked);
-  if (first || selector_.is_keyframe(estimate, scan.stamp)) {
-    add_keyframe(scan, estimate, tracked, first || step.matched);
+  if (first || gap > 0.0 || selector_.is_keyframe(estimate, scan.stamp)) {
+    add_keyframe(scan, estimate, tracked, T_odom_robot, first || gap > 0.0 || step.matched, gap);
     T_tracker_keyframe_ = tracked.T_map_robot;
     step.keyframe = true;
     step.loop_closures = close_loops(keyframes_.size() - 1, false);
@@ -171,7 +192,55 @@ void GraphSlam::add_odometry_edge(PoseGraphEdge& sequential) {
   odometry_noise_.observe(odometry_since_keyframe_, sequential.T_from_to, sequential_covariance);
 }
 
-void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked, bool matched) {
+// How far the odometry drifted from the graph's estimate (the tracker's motion, loops closed) over
+// stretches of `duration` seconds between keyframes, since the last gap: the largest disagreement
+// of the two motions over such a stretch, in translation and in heading, times duration / the
+// stretch where less than `duration` was seen; unbounded without odometry or with less than a
+// quarter of `duration` seen.
+Drift GraphSlam::odometry_drift_over(double duration) const {
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  constexpr double kLeastHistory = 0.25;
+  std::size_t begin = keyframes_.size();
+  while (begin > 0 && !keyframes_[begin - 1].after_gap) --begin;
+  if (begin > 0) --begin;  // the keyframe after the last gap opens the stretch
+  const std::size_t end = keyframes_.size();
+  if (end - begin < 2 || !keyframe_odometry_[begin]) return {.translation = kUnbounded, .rotation = kUnbounded};
+  const double seen = keyframes_[end - 1].stamp - keyframes_[begin].stamp;
+  if (seen < kLeastHistory * duration) return {.translation = kUnbounded, .rotation = kUnbounded};
+  const double stretch = std::min(duration, seen);
+  Drift largest;
+  for (std::size_t i = begin, j = begin; i < end; ++i) {
+    while (j < end && keyframes_[j].stamp - keyframes_[i].stamp < stretch) ++j;
+    if (j == end) break;
+    const Eigen::Vector3d apart = motion_difference(keyframe_odometry_[i]->between(*keyframe_odometry_[j]),
+                                                    graph_.poses[keyframes_[i].node].between(graph_.poses[keyframes_[j].node]));
+    largest.translation = std::max(largest.translation, apart.head<2>().norm());
+    largest.rotation = std::max(largest.rotation, std::abs(apart.z()));
+  }
+  const double scale = duration / stretch;
+  return {.translation = scale * largest.translation, .rotation = scale * largest.rotation};
+}
+
+// The edge across a gap of `gap` seconds: the odometry's drift over it as standard deviations, on
+// the sequential edges' floor (the motion noise model, linear in one increment's length, would
+// count the tens of metres of a gap's increment as one step: 2 rad on ACES, where the odometry
+// drifts 0.3 rad in that time). Unbounded: the motion noise of a path of gap_speed x gap (at least
+// the increment's own length) with the increment's turn. The heading's sigma at most pi.
+Covariance3 GraphSlam::gap_covariance(const SE2& increment, double gap, const Drift& drift) const {
+  Covariance3 covariance;
+  if (std::isfinite(drift.translation) && std::isfinite(drift.rotation)) {
+    const double translation = std::max(drift.translation, config_.sequential_sigma_translation);
+    covariance = covariance_from_sigmas(translation, translation, std::max(drift.rotation, config_.sequential_sigma_rotation));
+  } else {
+    const double path = std::max(increment.translation().norm(), config_.gap_speed * gap);
+    covariance = odometry_noise().covariance(SE2(path, 0.0, increment.theta()));
+  }
+  covariance(2, 2) = std::min(covariance(2, 2), std::numbers::pi * std::numbers::pi);
+  return covariance;
+}
+
+void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked,
+                             const std::optional<SE2>& T_odom_robot, bool matched, double gap) {
   Keyframe keyframe;
   keyframe.node = graph_.poses.size();
   keyframe.scan = stats_.scans;
@@ -182,13 +251,22 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
   } else {
     const Keyframe& previous = keyframes_.back();
     const SE2& T_map_previous = graph_.poses[previous.node];
-    keyframe.path_distance = previous.path_distance + (estimate.translation() - T_map_previous.translation()).norm();
+    const double moved = (estimate.translation() - T_map_previous.translation()).norm();
+    keyframe.path_distance = previous.path_distance + std::max(moved, config_.gap_speed * gap);
     PoseGraphEdge edge;
     edge.from = static_cast<int>(previous.node);
     edge.to = static_cast<int>(keyframe.node);
     edge.T_from_to = T_map_previous.between(estimate);
-    edge.information = information_from_covariance(sequential_covariance(tracked));
-    if (config_.odometry_edges && odometry_intact_) add_odometry_edge(edge);
+    if (gap > 0.0) {
+      const Drift drift = odometry_drift_over(gap);
+      keyframe.after_gap = true;
+      keyframe.gap_drift_translation = drift.translation;
+      keyframe.gap_drift_rotation = drift.rotation;
+      edge.information = information_from_covariance(gap_covariance(edge.T_from_to, gap, drift));
+    } else {
+      edge.information = information_from_covariance(sequential_covariance(tracked));
+    }
+    if (config_.odometry_edges && odometry_intact_ && gap == 0.0) add_odometry_edge(edge);
     graph_.edges.push_back(edge);
     keyframe_motion_.push_back(edge.T_from_to);
     if (!matched) ++stats_.sequential_failures;
@@ -198,6 +276,7 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
   graph_.poses.push_back(estimate);
   selector_.accept(estimate, scan.stamp);
   scans_.push_back({scan.stamp, keyframes_.size(), SE2()});
+  keyframe_odometry_.push_back(T_odom_robot);
   keyframes_.push_back(std::move(keyframe));
   keyframe_scans_.push_back(scan);
   ++stats_.keyframes;
@@ -433,7 +512,8 @@ void GraphSlam::copy_loop_stats() {
 // within link_reach() (a loop closed for the first time, not a revisit of a place already closed).
 bool GraphSlam::closes_new_loop(const PoseGraphEdge& edge) const {
   const double reach = link_reach();
-  const std::vector<GraphPath> paths = graph_paths(graph_, static_cast<std::size_t>(edge.to), reach);
+  const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes_, graph_.size(), config_.loop_closure.drift);
+  const std::vector<GraphPath> paths = graph_paths(graph_, static_cast<std::size_t>(edge.to), reach, &gaps);
   return !(paths[static_cast<std::size_t>(edge.from)].distance <= reach);
 }
 

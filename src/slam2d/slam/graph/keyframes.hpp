@@ -46,6 +46,12 @@ struct Keyframe {
   double stamp = 0.0;          // s
   PointCloud2 cloud;           // robot frame
   double path_distance = 0.0;  // m travelled from the first keyframe (estimate at creation)
+  // The first keyframe after a gap in the scans: the edges from the keyframe before hold only the
+  // odometry over the gap, so the drift across them is the odometry's over that time (standard
+  // deviations; infinite where nothing tells it), not the loop closer's model of the tracker's.
+  bool after_gap = false;
+  double gap_drift_translation = 0.0;  // m
+  double gap_drift_rotation = 0.0;     // rad
   // Lifelong (keyframes.redundant_radius > 0):
   bool released = false;                  // its points were dropped (a node only, no loop target)
   bool witness = false;                   // it witnessed a release: it keeps its data for good

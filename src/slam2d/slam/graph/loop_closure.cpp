@@ -19,6 +19,8 @@
 namespace slam2d {
 
 Drift drift_along(const GraphPath& path, const DriftModel& model) {
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  if (!std::isfinite(path.distance) || !std::isfinite(path.turned)) return {.translation = kUnbounded, .rotation = kUnbounded};
   return {.translation = model.translation_per_metre * path.distance,
           .rotation = model.rotation_per_metre * path.distance + model.rotation_per_radian * path.turned};
 }
@@ -41,15 +43,43 @@ void validate(const LoopClosureConfig& config) {
   validate(config.large);
 }
 
-std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, double max_distance) {
+std::vector<std::optional<GraphPath>> gap_steps(const std::vector<Keyframe>& keyframes, std::size_t nodes,
+                                                const DriftModel& model) {
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  std::vector<std::optional<GraphPath>> steps(nodes);
+  for (const Keyframe& keyframe : keyframes) {
+    if (!keyframe.after_gap || keyframe.node >= nodes) continue;
+    // drift_along's inverse: the distance that gives the translation's drift, the turn that adds
+    // what the distance does not give of the rotation's.
+    const double distance = model.translation_per_metre > 0.0 && std::isfinite(keyframe.gap_drift_translation)
+                                ? keyframe.gap_drift_translation / model.translation_per_metre
+                                : kUnbounded;
+    const double rest = keyframe.gap_drift_rotation - model.rotation_per_metre * distance;
+    const double turned = !std::isfinite(distance) || !std::isfinite(rest) ? kUnbounded
+                          : rest <= 0.0                                     ? 0.0
+                          : model.rotation_per_radian > 0.0                 ? rest / model.rotation_per_radian
+                                                                            : kUnbounded;
+    steps[keyframe.node] = GraphPath{.distance = distance, .turned = turned};
+  }
+  return steps;
+}
+
+std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, double max_distance,
+                                   const std::vector<std::optional<GraphPath>>* steps) {
   struct Step {
     std::size_t to;
     double length, turn;
   };
+  const auto gap_step = [&](const PoseGraphEdge& edge) -> const std::optional<GraphPath>* {
+    const auto later = static_cast<std::size_t>(std::max(edge.from, edge.to));
+    if (!steps || std::abs(edge.to - edge.from) != 1 || later >= steps->size() || !(*steps)[later]) return nullptr;
+    return &(*steps)[later];
+  };
   std::vector<std::vector<Step>> adjacent(graph.size());
   for (const PoseGraphEdge& edge : graph.edges) {
-    const double length = edge.T_from_to.translation().norm();
-    const double turn = std::abs(edge.T_from_to.theta());
+    const std::optional<GraphPath>* gap = gap_step(edge);
+    const double length = gap ? (*gap)->distance : edge.T_from_to.translation().norm();
+    const double turn = gap ? (*gap)->turned : std::abs(edge.T_from_to.theta());
     adjacent[static_cast<std::size_t>(edge.from)].push_back({static_cast<std::size_t>(edge.to), length, turn});
     adjacent[static_cast<std::size_t>(edge.to)].push_back({static_cast<std::size_t>(edge.from), length, turn});
   }
@@ -76,8 +106,9 @@ std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, d
   return paths;
 }
 
-std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance) {
-  const std::vector<GraphPath> paths = graph_paths(graph, source, max_distance);
+std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance,
+                                              const std::vector<std::optional<GraphPath>>* steps) {
+  const std::vector<GraphPath> paths = graph_paths(graph, source, max_distance, steps);
   std::vector<bool> reached(paths.size());
   for (std::size_t n = 0; n < paths.size(); ++n) reached[n] = paths[n].distance <= max_distance;
   return reached;
@@ -257,7 +288,9 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
 
 LoopCloser::Uncertainty LoopCloser::uncertainty(const std::vector<Keyframe>& keyframes, const PoseGraph& graph,
                                                 std::size_t current) const {
-  const std::vector<GraphPath> paths = graph_paths(graph, keyframes[current].node);
+  const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes, graph.size(), config_.drift);
+  const std::vector<GraphPath> paths = graph_paths(graph, keyframes[current].node,
+                                                   std::numeric_limits<double>::infinity(), &gaps);
   Uncertainty uncertainty;
   uncertainty.radius.resize(paths.size());
   uncertainty.heading.resize(paths.size());
@@ -362,8 +395,9 @@ std::optional<LoopClosure> LoopCloser::confirm(const std::vector<Keyframe>& keyf
   const SE2 T_map_matched = node_pose(graph, keyframes[first.anchor]) * first.edge.T_from_to;
   const SE2 correction = T_map_matched * node_pose(graph, keyframes[first.keyframe]).inverse();
   const SE2 guess = correction * node_pose(graph, keyframes[current]);
+  const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes, graph.size(), config_.drift);
   const std::vector<bool> linked =
-      nodes_within_graph_distance(graph, keyframes[current].node, config_.min_path_distance);
+      nodes_within_graph_distance(graph, keyframes[current].node, config_.min_path_distance, &gaps);
   const std::vector<Chain> chains = chains_around(keyframes, graph, current, guess.translation(),
                                                   constant(config_.search_radius), config_, linked, false);
   for (std::size_t c = 0; c < chains.size() && c < static_cast<std::size_t>(config_.max_chains); ++c) {

@@ -275,14 +275,23 @@ void validate(const DriftModel& model);
 void validate(const LargeClosureConfig& config);
 void validate(const LoopClosureConfig& config);
 
+/// Per node, the step from the node before it where that step crosses a gap in the scans
+/// (Keyframe::after_gap; graph SLAM's nodes are its keyframes, in order): the travel that the
+/// model's drift would give the gap's (Keyframe::gap_drift_*), infinite where that is unknown.
+std::vector<std::optional<GraphPath>> gap_steps(const std::vector<Keyframe>& keyframes, std::size_t nodes,
+                                                const DriftModel& model);
+
 /// The shortest paths (by distance travelled, Dijkstra) from `source` to every node, up to
-/// `max_distance` (farther nodes: infinity).
+/// `max_distance` (farther nodes: infinity). An edge between nodes n - 1 and n counts the step
+/// `steps` (if given) holds for n instead of its own translation and rotation.
 std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source,
-                                   double max_distance = std::numeric_limits<double>::infinity());
+                                   double max_distance = std::numeric_limits<double>::infinity(),
+                                   const std::vector<std::optional<GraphPath>>* steps = nullptr);
 
 /// The nodes reachable from `source` along edges whose translations sum to at most `max_distance`
-/// (Dijkstra), as a flag per node.
-std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance);
+/// (Dijkstra; `steps` as for graph_paths), as a flag per node.
+std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance,
+                                              const std::vector<std::optional<GraphPath>>* steps = nullptr);
 
 /// Runs of consecutive keyframe indices (sorted input) of at least `min_size` elements, as [begin, end).
 std::vector<std::pair<std::size_t, std::size_t>> group_into_chains(const std::vector<std::size_t>& sorted_candidates,

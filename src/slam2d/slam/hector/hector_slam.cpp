@@ -79,14 +79,14 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   if (config_.sweep_duration > 0.0) {
     corrected = correct_rotational_distortion(scan, angular_rate(scan, inputs, step.prediction), config_.sweep_duration);
   }
-  if (last_pose_) {  // Sec. IV-B/C: match against the map built so far
+  if (last_pose_ && !map_empty_) {  // Sec. IV-B/C: match against the map built so far
     step.match = match(corrected, inputs, step.prediction);
     step.matched = true;
     step.T_map_robot = step.match.T_target_source;
     step.covariance = step.match.covariance;
     fuse(step);
   }
-  if (!last_pose_ || (!odometry_.hold_map && needs_map_update(step.T_map_robot))) {
+  if (map_empty_ || (!odometry_.hold_map && needs_map_update(step.T_map_robot))) {
     integrate(corrected, inputs, step.T_map_robot);
     step.map_updated = true;
   }
@@ -98,6 +98,11 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   last_stamp_ = scan.stamp;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
   return step;
+}
+
+void HectorSlam::restart_map() {
+  map_ = MapPyramid(map_config(config_));
+  map_empty_ = true;
 }
 
 // The match and the odometry's prediction as two measurements of the pose (the header's fusion):
@@ -262,6 +267,7 @@ void HectorSlam::integrate(const LaserScan& scan, const HectorInputs& inputs, co
   LaserScan usable = inputs.attitude ? levelled_scan(scan, *inputs.attitude) : scan;
   usable.range_min = std::max(usable.range_min, config_.min_range);
   map_.integrate_scan(usable, T_map_robot);
+  map_empty_ = false;
   last_update_pose_ = T_map_robot;
   ++map_updates_;
 }

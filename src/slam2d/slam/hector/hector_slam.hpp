@@ -201,6 +201,11 @@ class HectorSlam {
 
   /// Processes one scan. Throws Error when config.prior is kOdometry and no odometry pose is given.
   HectorStep add_scan(const LaserScan& scan, const HectorInputs& inputs = {});
+  /// Starts a new map: the next scan is placed at its prediction and not matched, as the first
+  /// one was, and the maps after it hold only the scans from there (graph SLAM's tracker after a
+  /// gap in the scans, where the prediction may be far off and the old map would pull the new
+  /// scans onto the wrong place). The pose, the odometry's state and the learnt noise go on.
+  void restart_map();
 
   const MapPyramid& map() const { return map_; }
   /// One pose per scan added, in order, stamped with the scan's stamp.
@@ -242,6 +247,7 @@ class HectorSlam {
   OdometryGuard odometry_guard_;
   OdometryCheck odometry_;             // the guard's verdict on this scan's odometry
   MapPyramid map_;
+  bool map_empty_ = true;              // no scan in map_ yet (the first scan, or after restart_map)
   Trajectory trajectory_;
   std::optional<SE2> last_pose_;       // estimate at the previous scan
   SE2 last_moved_pose_;                // estimate at the last scan whose odometry pose moved
