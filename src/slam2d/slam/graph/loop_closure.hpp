@@ -117,7 +117,11 @@ struct LargeClosureConfig {
   int global_interval = 16;
   double max_global_radius = 50.0;
   double max_global_window = 25.0;
-  int max_global_chains = 1;
+  // Chains searched per global search, nearest the estimate first; the best closure wins. Where the
+  // estimate is metres off (a gap in the scans, a long drift) the nearest chain need not be the
+  // place: one chain let FR079 close on an office 17 m along its corridor after a gap (2.0 m over
+  // all relations), two to eight found the right one (0.038 m; docs/methods/graph_slam.md).
+  int max_global_chains = 4;
   // The coarse search: a 10 cm table under a 10 cm kernel, 0.57 deg steps (a point 10 m out moves
   // one cell per step), no refinement; its window is set per search.
   MapMatchConfig global_coarse{.correlative = {.resolution = 0.1, .sigma = 0.1, .angular_step = 0.01, .min_score = 0.5},
