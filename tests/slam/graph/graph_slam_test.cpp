@@ -188,6 +188,15 @@ TEST(GraphSlam, RejectsBadConfiguration) {
   config = {};
   config.tracking.max_range = -1.0;
   EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.gap_seconds = 0.0;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.gap_periods = 0.5;
+  EXPECT_THROW(GraphSlam{config}, Error);
+  config = {};
+  config.gap_speed = -1.0;
+  EXPECT_THROW(GraphSlam{config}, Error);
 }
 
 // Lifelong mapping: the office's corridor ring driven three times. With the keyframe budget on (the
