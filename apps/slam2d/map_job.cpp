@@ -234,9 +234,13 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
     }
     return slam.add_scan(laser.scan, inputs).T_map_robot;
   }, [&](const ImuMessage& message) { imu = message.reading; });
-  run.map = slam.map().level(0).to_occupancy_map();
+  run.trajectory = slam.trajectory();  // the poses since a gap move when Hector finds its place again
+  run.map = slam.occupancy_map();
   run.resolution = config.map.grid.resolution;
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
+  const HectorGapStats& gaps = slam.gap_stats();
+  run.method_summary.add("scan_gaps", gaps.gaps).add("gaps_tracked_through", gaps.tracked).add("gap_relocalizations", gaps.relocalized);
+  run.method_summary.add("gap_relocalization_attempts", gaps.attempts).add("gaps_not_relocalized", gaps.abandoned);
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
     if (config.fuse_odometry) {

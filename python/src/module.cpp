@@ -257,7 +257,7 @@ PYBIND11_MODULE(_slam2d, m) {
       }, py::arg("scan"), py::arg("odom") = py::none())
       .def("finish", [](HectorSlam&) {})
       .def_property_readonly("trajectory", [](const HectorSlam& slam) { return trajectory_array(slam.trajectory()); })
-      .def_property_readonly("map", [](const HectorSlam& slam) { return map_dict(slam.map().level(0).to_occupancy_map()); });
+      .def_property_readonly("map", [](const HectorSlam& slam) { return map_dict(slam.occupancy_map()); });
 
   py::class_<RbpfSlam>(m, "RbpfSlam", "The Rao-Blackwellized particle filter, one scan at a time (configs/rbpf.yaml's fields)")
       .def(py::init([](const std::string& preset) { return std::make_unique<RbpfSlam>(method_config<RbpfConfig>(preset, "rbpf")); }),

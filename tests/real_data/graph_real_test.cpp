@@ -184,7 +184,7 @@ TEST(GraphSlamRealData, ClosesTheLoopsOfAces) {
 // wheel odometry kept. Intel's odometry is 17 m and 1.5 rad off across the gap: the tracker, pulled
 // onto its old map at the wrong place, left everything after the gap there (3.2 m over all
 // relations). Across a gap the tracker starts a new map, and the loop closer searches as far as
-// the odometry's drift measured before the gap reaches (GraphSlamConfig::gap_seconds): 0.017 m.
+// the odometry's drift measured before the gap reaches (GraphSlamConfig::gap): 0.017 m.
 // ACES's odometry is 1.7 m and 0.1 rad off there, its relocalization was right already, and stays
 // right (0.040 m; the clean log 0.038 m). FR079's is 17 m and 1 rad off, and the chain nearest the
 // estimate holds an office 17 m along the corridor that matches as well as the right one: with one
@@ -193,7 +193,7 @@ TEST(GraphSlamRealData, FindsItsPlaceAgainAfterAGapInTheScans) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::string gap = "scan-gap:every=100000,start=300,duration=198";
   GraphSlamConfig without;
-  without.gap_seconds = 1e9;
+  without.gap.seconds = 1e9;
   EXPECT_LT(error_under(data, "intel", gap, GraphSlamConfig{}), 0.03);
   EXPECT_GT(error_under(data, "intel", gap, without), 1.0) << "the gap no longer tests the handling";
   EXPECT_LT(error_under(data, "aces", gap, GraphSlamConfig{}), 0.045);

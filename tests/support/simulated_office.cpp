@@ -19,4 +19,18 @@ const SimulatedRun& simulated_office(double duration, std::uint64_t seed) {
   return it->second;
 }
 
+std::vector<SE2> odometry_with_heading_drift(const SimulatedRun& run, double rate) {
+  const std::vector<const LaserMessage*> lasers = laser_messages(run);
+  std::vector<SE2> drifting;
+  for (std::size_t i = 0; i < lasers.size(); ++i) {
+    if (i == 0) {
+      drifting.push_back(lasers.front()->odom_pose);
+      continue;
+    }
+    const SE2 step = lasers[i - 1]->odom_pose.between(lasers[i]->odom_pose);
+    drifting.push_back(drifting.back() * SE2(step.x(), step.y(), step.theta() + rate * step.x()));
+  }
+  return drifting;
+}
+
 }  // namespace slam2d::test

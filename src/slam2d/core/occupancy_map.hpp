@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "slam2d/core/point_cloud.hpp"
 #include "slam2d/core/se2.hpp"
 
 namespace slam2d {
@@ -35,6 +36,14 @@ struct OccupancyMap {
 
   bool operator==(const OccupancyMap& other) const = default;
 };
+
+/// The centres of the cells whose occupancy is at least `threshold` (%), in the map frame.
+PointCloud2 occupied_points(const OccupancyMap& map, int threshold);
+
+/// One map over both: `above`'s known cells, `below`'s where `above` knows nothing. Both of one
+/// resolution, axis-aligned, their origins on one lattice of cells (two grids of one geometry);
+/// an empty map leaves the other.
+OccupancyMap overlay(const OccupancyMap& below, const OccupancyMap& above);
 
 /// An 8-bit RGB raster, row-major with row 0 at the top, as image files store it.
 struct RgbImage {

@@ -19,26 +19,10 @@ void validate(const EkfConfig& config) {
   check(config.max_window_theta >= config.min_window_theta, "EkfConfig: max_window_theta must be >= min_window_theta");
 }
 
-namespace {
-
-// The centres of the map's obstacle cells (the likelihood field's threshold), in the map frame.
-PointCloud2 occupied_cells(const LocalizationMap& map) {
-  PointCloud2 cloud;
-  const OccupancyMap& grid = map.map();
-  for (int iy = 0; iy < grid.height; ++iy) {
-    for (int ix = 0; ix < grid.width; ++ix) {
-      if (grid.at(ix, iy) >= map.field().config().occupied_threshold) cloud.points.push_back(grid.cell_center(ix, iy));
-    }
-  }
-  return cloud;
-}
-
-}  // namespace
-
 EkfLocalization::EkfLocalization(const LocalizationMap& map, const EkfConfig& config)
     : map_(map), config_(config), status_(config.status), motion_noise_(config.motion, config.motion_noise) {
   validate(config_);
-  const PointCloud2 obstacles = occupied_cells(map_);
+  const PointCloud2 obstacles = occupied_points(map_.map(), map_.field().config().occupied_threshold);
   check(!obstacles.empty(), "ekf: the map has no occupied cells to match against");
   // The margin lets the widest window reach past the outermost walls without leaving the table.
   table_ = CorrelativeGrid(obstacles, CorrelativeGridConfig{.resolution = map_.map().resolution,

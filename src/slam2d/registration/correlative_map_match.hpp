@@ -66,6 +66,28 @@ void describe(Fields& f, MapMatchConfig& c) {
 /// Throws Error for out-of-range values.
 void validate(const MapMatchConfig& config);
 
+/// A place searched for over a window of metres and radians (graph SLAM's global loop search,
+/// Hector's search after a gap), coarse then fine. The coarse search: a 10 cm table under a 10 cm
+/// kernel, 0.57 deg steps (a point 10 m out moves one cell per step), no refinement; its window is
+/// set per search.
+inline MapMatchConfig wide_search_coarse() {
+  return {.correlative = {.resolution = 0.1, .sigma = 0.1, .angular_step = 0.01, .min_score = 0.5},
+          .refine = false,
+          .map_voxel = 0.05,
+          .min_score_at_window_edge = 1.0};
+}
+
+/// The fine search around the coarse pose, with the refinement.
+inline MapMatchConfig wide_search_fine() {
+  return {.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.3, .window_y = 0.3, .window_theta = 0.03,
+                          .angular_step = 0.004, .min_score = 0.5},
+          .refinement = {.max_correspondence_distance = 0.3},
+          .max_refinement_shift = 0.3,
+          .min_sigma_translation = 0.01,
+          .min_sigma_rotation = 0.004,
+          .min_score_at_window_edge = 1.0};
+}
+
 /// The map side of a match, built once and matched against many scans: the map-frame points
 /// (with normals) and their correlative lookup table.
 struct MatchMap {

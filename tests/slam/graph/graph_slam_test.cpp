@@ -138,17 +138,13 @@ TEST(GraphSlam, RobustKernelAbsorbsAFalseLoopEdge) {
 
 // The office run with the scans of [100 s, 130 s) missing and an odometry whose heading drifts by
 // 0.05 rad per metre driven (Intel's is 0.06): across the gap it is metres and a radian off, as far
-// as it drifted over any 30 s before. A 30 s pause is a gap (past gap_seconds and 20 intervals),
+// as it drifted over any 30 s before. A 30 s pause is a gap (past gap.seconds and 20 intervals),
 // after which graph SLAM finds its place again. The same scans with every stamp ten times later (a
 // scan a second) and 1.5 s missing, a pause of 15 intervals, are no gap.
 TEST(GraphSlam, CountsAGapByTheScanIntervalAndFindsItsPlaceAgain) {
   const SimulatedRun& run = office_run();
   const std::vector<const LaserMessage*> lasers = laser_messages(run);
-  std::vector<SE2> drifting{lasers.front()->odom_pose};
-  for (std::size_t i = 1; i < lasers.size(); ++i) {
-    const SE2 step = lasers[i - 1]->odom_pose.between(lasers[i]->odom_pose);
-    drifting.push_back(drifting.back() * SE2(step.x(), step.y(), step.theta() + 0.05 * step.x()));
-  }
+  const std::vector<SE2> drifting = test::odometry_with_heading_drift(run, 0.05);
   const auto map_with_pause = [&](double from, double to, double stamp_scale) {
     GraphSlam slam;
     Trajectory truth;
@@ -189,13 +185,13 @@ TEST(GraphSlam, RejectsBadConfiguration) {
   config.tracking.max_range = -1.0;
   EXPECT_THROW(GraphSlam{config}, Error);
   config = {};
-  config.gap_seconds = 0.0;
+  config.gap.seconds = 0.0;
   EXPECT_THROW(GraphSlam{config}, Error);
   config = {};
-  config.gap_periods = 0.5;
+  config.gap.periods = 0.5;
   EXPECT_THROW(GraphSlam{config}, Error);
   config = {};
-  config.gap_speed = -1.0;
+  config.gap.speed = -1.0;
   EXPECT_THROW(GraphSlam{config}, Error);
 }
 

@@ -62,7 +62,8 @@ GraphSlam::GraphSlam(const GraphSlamConfig& config)
       selector_(config.keyframes),
       back_end_(config.back_end),
       loop_closer_(config.loop_closure),
-      odometry_noise_(config.odometry_noise) {
+      odometry_noise_(config.odometry_noise),
+      gaps_(config.gap) {
   validate(config_);
 }
 
@@ -86,6 +87,7 @@ HectorStep GraphSlam::track(const LaserScan& scan, const std::optional<SE2>& T_o
   if (!tracker_) {
     HectorSlamConfig config = config_.tracking;
     config.prior = T_odom_robot ? MotionPrior::kOdometry : MotionPrior::kLastPose;
+    config.relocalization.enabled = false;  // graph SLAM restarts its map at a gap; the loop closer searches
     if (!T_odom_robot) {  // the last pose is no measurement of where the robot is: neither a prior
       config.prior_information_translation = 0.0;  // at it nor a reason to stay there
       config.prior_information_rotation = 0.0;
@@ -102,23 +104,9 @@ HectorStep GraphSlam::track(const LaserScan& scan, const std::optional<SE2>& T_o
   return tracker_->add_scan(scan, inputs);
 }
 
-// Whether this scan ends a gap in the scans (gap_seconds, gap_periods); the typical interval learns
-// from the others.
-bool GraphSlam::ends_gap(double stamp) {
-  if (scans_.empty()) return false;
-  const double interval = stamp - scans_.back().stamp;
-  if (interval > std::max(config_.gap_seconds, config_.gap_periods * typical_interval_)) return true;
-  constexpr double kIntervalRate = 0.05;  // the running mean's weight of one interval
-  if (interval > 0.0) {
-    typical_interval_ = typical_interval_ > 0.0 ? typical_interval_ + kIntervalRate * (interval - typical_interval_)
-                                                : interval;
-  }
-  return false;
-}
-
 GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2>& T_odom_robot) {
   GraphSlamStep step;
-  const double gap = ends_gap(scan.stamp) ? scan.stamp - scans_.back().stamp : 0.0;
+  const double gap = gaps_.gap_before(scan.stamp);
   if (gap > 0.0 && tracker_) {
     tracker_->restart_map();
     ++stats_.gaps;
@@ -193,38 +181,22 @@ void GraphSlam::add_odometry_edge(PoseGraphEdge& sequential) {
 }
 
 // How far the odometry drifted from the graph's estimate (the tracker's motion, loops closed) over
-// stretches of `duration` seconds between keyframes, since the last gap: the largest disagreement
-// of the two motions over such a stretch, in translation and in heading, times duration / the
-// stretch where less than `duration` was seen; unbounded without odometry or with less than a
-// quarter of `duration` seen.
+// stretches of `duration` seconds between the keyframes since the last gap (core/scan_gaps.hpp).
 Drift GraphSlam::odometry_drift_over(double duration) const {
-  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
-  constexpr double kLeastHistory = 0.25;
   std::size_t begin = keyframes_.size();
   while (begin > 0 && !keyframes_[begin - 1].after_gap) --begin;
   if (begin > 0) --begin;  // the keyframe after the last gap opens the stretch
-  const std::size_t end = keyframes_.size();
-  if (end - begin < 2 || !keyframe_odometry_[begin]) return {.translation = kUnbounded, .rotation = kUnbounded};
-  const double seen = keyframes_[end - 1].stamp - keyframes_[begin].stamp;
-  if (seen < kLeastHistory * duration) return {.translation = kUnbounded, .rotation = kUnbounded};
-  const double stretch = std::min(duration, seen);
-  Drift largest;
-  for (std::size_t i = begin, j = begin; i < end; ++i) {
-    while (j < end && keyframes_[j].stamp - keyframes_[i].stamp < stretch) ++j;
-    if (j == end) break;
-    const Eigen::Vector3d apart = motion_difference(keyframe_odometry_[i]->between(*keyframe_odometry_[j]),
-                                                    graph_.poses[keyframes_[i].node].between(graph_.poses[keyframes_[j].node]));
-    largest.translation = std::max(largest.translation, apart.head<2>().norm());
-    largest.rotation = std::max(largest.rotation, std::abs(apart.z()));
+  std::vector<OdometryAndEstimate> history;
+  for (std::size_t k = begin; k < keyframes_.size() && keyframe_odometry_[k]; ++k) {
+    history.push_back({keyframes_[k].stamp, *keyframe_odometry_[k], graph_.poses[keyframes_[k].node]});
   }
-  const double scale = duration / stretch;
-  return {.translation = scale * largest.translation, .rotation = scale * largest.rotation};
+  return slam2d::odometry_drift_over(history, duration);
 }
 
 // The edge across a gap of `gap` seconds: the odometry's drift over it as standard deviations, on
 // the sequential edges' floor (the motion noise model, linear in one increment's length, would
 // count the tens of metres of a gap's increment as one step: 2 rad on ACES, where the odometry
-// drifts 0.3 rad in that time). Unbounded: the motion noise of a path of gap_speed x gap (at least
+// drifts 0.3 rad in that time). Unbounded: the motion noise of a path of gap.speed x gap (at least
 // the increment's own length) with the increment's turn. The heading's sigma at most pi.
 Covariance3 GraphSlam::gap_covariance(const SE2& increment, double gap, const Drift& drift) const {
   Covariance3 covariance;
@@ -232,7 +204,7 @@ Covariance3 GraphSlam::gap_covariance(const SE2& increment, double gap, const Dr
     const double translation = std::max(drift.translation, config_.sequential_sigma_translation);
     covariance = covariance_from_sigmas(translation, translation, std::max(drift.rotation, config_.sequential_sigma_rotation));
   } else {
-    const double path = std::max(increment.translation().norm(), config_.gap_speed * gap);
+    const double path = std::max(increment.translation().norm(), config_.gap.speed * gap);
     covariance = odometry_noise().covariance(SE2(path, 0.0, increment.theta()));
   }
   covariance(2, 2) = std::min(covariance(2, 2), std::numbers::pi * std::numbers::pi);
@@ -252,7 +224,7 @@ void GraphSlam::add_keyframe(const LaserScan& scan, const SE2& estimate, const H
     const Keyframe& previous = keyframes_.back();
     const SE2& T_map_previous = graph_.poses[previous.node];
     const double moved = (estimate.translation() - T_map_previous.translation()).norm();
-    keyframe.path_distance = previous.path_distance + std::max(moved, config_.gap_speed * gap);
+    keyframe.path_distance = previous.path_distance + std::max(moved, config_.gap.speed * gap);
     PoseGraphEdge edge;
     edge.from = static_cast<int>(previous.node);
     edge.to = static_cast<int>(keyframe.node);

@@ -56,6 +56,7 @@
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/occupancy_map.hpp"
+#include "slam2d/core/scan_gaps.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/optim/pose_graph.hpp"
@@ -119,25 +120,21 @@ struct GraphSlamConfig {
   // rule). A refused one is remembered and goes in with a later one it agrees with. false: it always
   // goes in.
   bool check_large_closures = true;
-  // A gap in the scans (the logger paused, the laser dropped out): a scan more than
-  // max(gap_seconds, gap_periods x the typical interval between scans) after the one before. Across
-  // it only the odometry tells where the robot went, so:
+  // A gap in the scans (core/scan_gaps.hpp: the logger paused, the laser dropped out). Across it
+  // only the odometry tells where the robot went, so:
   // - the tracker starts a new local map (the old one would pull the new scans onto the wrong
   //   place when the odometry is off);
   // - the scan becomes a keyframe whose edge holds the odometry's increment with the odometry's own
-  //   drift over that time, measured before the gap: the largest disagreement between the
-  //   odometry's motion and the graph's estimate over any stretch as long as the gap since the last
-  //   one (scaled up by the gap over the stretch where less was seen; on the sequential floor;
-  //   heading sigma at most pi);
+  //   drift over that time, measured before the gap (core/scan_gaps.hpp's odometry_drift_over
+  //   against the graph's estimate since the last gap; on the sequential floor; heading sigma at
+  //   most pi);
   // - the loop closer's drift bound across it is that drift, so a place before the gap is searched
   //   for as far as the odometry may be off, and a closure to it is confirmed as a large one.
   // Without odometry, or with less than a quarter of the gap's duration seen before it, the drift
   // is unbounded (the whole window of loop_closure.large's global search) and the edge's noise that
-  // of a path of gap_speed x the gap's duration. gap_speed also counts as the distance travelled
-  // across a gap (Keyframe::path_distance).
-  double gap_seconds = 10.0;
-  double gap_periods = 20.0;
-  double gap_speed = 1.0;
+  // of a path of gap.speed x the gap's duration, which also counts as the distance travelled
+  // across the gap (Keyframe::path_distance).
+  ScanGapConfig gap{};
   double map_resolution = 0.05;
 };
 
@@ -147,7 +144,7 @@ void describe(Fields& f, GraphSlamConfig& c) {
   f.number("max_range", c.max_range, "m", greater_than(0),
            "> min_range; longer readings are dropped (no-return beams always are)");
   f.section("keyframes", c.keyframes, "when a scan becomes a graph node");
-  f.section("tracking", c.tracking, "the scan-to-map tracker (its prior is ignored)");
+  f.section("tracking", c.tracking, "the scan-to-map tracker (its prior and relocalization are ignored)");
   f.number("sequential_sigma_translation", c.sequential_sigma_translation, "m", greater_than(0),
            "standard deviation of a sequential edge's translation");
   f.number("sequential_sigma_rotation", c.sequential_sigma_rotation, "rad", greater_than(0), "... and rotation");
@@ -167,11 +164,7 @@ void describe(Fields& f, GraphSlamConfig& c) {
            "the back end's relative_tolerance during the run (finish(): back_end.relative_tolerance)");
   f.flag("check_large_closures", c.check_large_closures,
          "a confirmed large correction goes in only if the loop edges already there agree with it (optimize_gate_z)");
-  f.number("gap_seconds", c.gap_seconds, "s", greater_than(0),
-           "a scan at least this long after the one before ends a gap in the scans ...");
-  f.number("gap_periods", c.gap_periods, "1", at_least(1), "... and at least this many typical scan intervals");
-  f.number("gap_speed", c.gap_speed, "m/s", greater_than(0),
-           "across a gap the odometry's noise is that of a path this fast for the gap's duration");
+  f.section("gap", c.gap, "gaps in the scans: where the tracker starts a new map and the odometry alone bridges");
   f.number("map_resolution", c.map_resolution, "m per cell", greater_than(0), "of the occupancy map built from the keyframes");
 }
 
@@ -203,7 +196,7 @@ struct GraphSlamStats {
   std::size_t optimization_iterations = 0;  // LM iterations over all optimisations
   std::size_t deferred_optimizations = 0;   // closures whose optimisation was deferred (they agreed)
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
-  std::size_t gaps = 0;                 // gaps in the scans (gap_seconds, gap_periods)
+  std::size_t gaps = 0;                 // gaps in the scans (gap)
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
   std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
   MotionFusionStats fusion;             // the two edges of each keyframe step: consistent, or which was surer
@@ -256,11 +249,10 @@ class GraphSlam {
 
   PointCloud2 scan_cloud(const LaserScan& scan) const;
   HectorStep track(const LaserScan& scan, const std::optional<SE2>& T_odom_robot);
-  bool ends_gap(double stamp);
   void add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked,
                     const std::optional<SE2>& T_odom_robot, bool matched, double gap);
   Covariance3 sequential_covariance(const HectorStep& tracked) const;
-  Drift odometry_drift_over(double duration) const;
+  Drift odometry_drift_over(double duration) const;  // since the last gap (core/scan_gaps.hpp)
   Covariance3 gap_covariance(const SE2& increment, double gap, const Drift& drift) const;
   void accumulate_odometry(const HectorStep& tracked);
   void add_odometry_edge(PoseGraphEdge& sequential);
@@ -291,7 +283,6 @@ class GraphSlam {
   std::vector<SE2> keyframe_motion_;       // tracked motion from the previous keyframe
   std::vector<std::optional<SE2>> keyframe_odometry_;  // the odometry pose at each keyframe (when it came)
   std::vector<ScanRecord> scans_;
-  double typical_interval_ = 0.0;  // s between scans, a running mean over those not ending a gap
   PoseGraph graph_;
   SparsePoseAdjustment back_end_;
   LoopCloser loop_closer_;
@@ -300,6 +291,7 @@ class GraphSlam {
   SE2 T_tracker_keyframe_;             // the last keyframe in the tracker's map frame
   std::size_t release_checked_ = 0;  // lifelong: the first keyframe not yet checked for release
   OdometryNoiseModel odometry_noise_;
+  ScanGapDetector gaps_;
   SE2 odometry_since_keyframe_;       // the odometry's increments since the last keyframe, composed
   bool odometry_intact_ = false;      // ... all trusted by the guard (and odometry came)
   std::size_t first_unoptimized_edge_ = 0;  // the edges from here on came after the last optimisation

@@ -42,6 +42,7 @@
 #include <optional>
 #include <vector>
 
+#include "slam2d/core/scan_gaps.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/slam/graph/keyframes.hpp"
 #include "slam2d/registration/correlative_map_match.hpp"
@@ -70,12 +71,6 @@ void describe(Fields& f, DriftModel& c) {
   f.number("rotation_per_metre", c.rotation_per_metre, "rad per m travelled", at_least(0), "rotation drift from travel");
   f.number("rotation_per_radian", c.rotation_per_radian, "rad per rad turned", at_least(0), "rotation drift from turning");
 }
-
-/// The drift sigmas between two keyframes joined by a path.
-struct Drift {
-  double translation = 0.0;  // m
-  double rotation = 0.0;     // rad
-};
 
 /// The shortest path through a graph from a source node: the distance travelled (the edges'
 /// translations) and the angle turned along it (the edges' rotations).
@@ -122,20 +117,10 @@ struct LargeClosureConfig {
   // place: one chain let FR079 close on an office 17 m along its corridor after a gap (2.0 m over
   // all relations), two to eight found the right one (0.038 m; docs/methods/graph_slam.md).
   int max_global_chains = 4;
-  // The coarse search: a 10 cm table under a 10 cm kernel, 0.57 deg steps (a point 10 m out moves
-  // one cell per step), no refinement; its window is set per search.
-  MapMatchConfig global_coarse{.correlative = {.resolution = 0.1, .sigma = 0.1, .angular_step = 0.01, .min_score = 0.5},
-                               .refine = false,
-                               .map_voxel = 0.05,
-                               .min_score_at_window_edge = 1.0};
-  // The fine search around the coarse pose, with the refinement (the large window's table).
-  MapMatchConfig global_fine{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.3, .window_y = 0.3,
-                                             .window_theta = 0.03, .angular_step = 0.004, .min_score = 0.5},
-                             .refinement = {.max_correspondence_distance = 0.3},
-                             .max_refinement_shift = 0.3,
-                             .min_sigma_translation = 0.01,
-                             .min_sigma_rotation = 0.004,
-                             .min_score_at_window_edge = 1.0};
+  // The coarse search (its window set per search) and the fine one around its pose
+  // (registration/correlative_map_match.hpp's wide search).
+  MapMatchConfig global_coarse = wide_search_coarse();
+  MapMatchConfig global_fine = wide_search_fine();
 };
 
 template <typename Fields>

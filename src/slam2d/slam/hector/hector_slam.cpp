@@ -9,6 +9,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/odometry.hpp"
+#include "slam2d/registration/kd_tree.hpp"
 
 namespace slam2d {
 
@@ -16,6 +17,14 @@ namespace {
 
 // A mean squared residual (1 - M)^2 never exceeds 1: no match is retried.
 constexpr double kNoRecovery = 1.0;
+
+// The coarse search of the map before a gap over the window.
+MapMatchConfig coarse_search(const HectorRelocalizationConfig& config, double window, double window_theta) {
+  MapMatchConfig coarse = config.coarse;
+  coarse.correlative.window_x = coarse.correlative.window_y = window;
+  coarse.correlative.window_theta = window_theta;
+  return coarse;
+}
 
 // The scan with each reading scaled to its horizontal length under the attitude (bearings kept:
 // their change is second order in roll and pitch), for the map update of a tilted scan.
@@ -42,8 +51,12 @@ MapPyramidConfig map_config(const HectorSlamConfig& config) {
 void validate(const HectorSlamConfig& config) {
   check_fields(config, "HectorSlamConfig");
   check(config.max_range > config.min_range, "HectorSlamConfig: max_range must be > min_range");
+  check(config.relocalization.max_window >= config.relocalization.min_window,
+        "HectorSlamConfig: relocalization.max_window must be >= relocalization.min_window");
   validate(config.matcher);
   validate(config.odometry_noise);
+  validate(config.relocalization.coarse);
+  validate(config.relocalization.fine);
 }
 
 HectorSlam::HectorSlam(const HectorSlamConfig& config)
@@ -51,7 +64,8 @@ HectorSlam::HectorSlam(const HectorSlamConfig& config)
       odometry_guard_(config.odometry_guard),
       map_(map_config(config)),
       odometry_noise_(config.odometry_noise),
-      odometry_calibration_(config.odometry_calibration) {
+      odometry_calibration_(config.odometry_calibration),
+      gaps_(config.relocalization.gap) {
   validate(config_);
   free_matcher_ = config_.matcher;
   free_matcher_.rotation_search_range = config_.rotation_search_without_odometry;
@@ -73,6 +87,8 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   HectorStep step;
   if (config_.prior == MotionPrior::kOdometry) odometry_ = odometry_guard_.check(scan.stamp, *inputs.T_odom_robot);
   step.odometry = odometry_;
+  const double gap = config_.relocalization.enabled ? gaps_.gap_before(scan.stamp) : 0.0;
+  if (gap > 0.0) begin_relocalization(gap);
   step.prediction = predict(scan);
   step.T_map_robot = step.prediction;
   LaserScan corrected = scan;
@@ -97,6 +113,11 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
   if (odometry_.moved) last_moved_pose_ = step.T_map_robot;
   last_stamp_ = scan.stamp;
   trajectory_.push_back(scan.stamp, step.T_map_robot);
+  if (config_.relocalization.enabled) remember(scan.stamp, inputs);
+  if (relocalization_) {
+    relocalize(corrected, inputs);
+    step.T_map_robot = *last_pose_;
+  }
   return step;
 }
 
@@ -267,9 +288,170 @@ void HectorSlam::integrate(const LaserScan& scan, const HectorInputs& inputs, co
   LaserScan usable = inputs.attitude ? levelled_scan(scan, *inputs.attitude) : scan;
   usable.range_min = std::max(usable.range_min, config_.min_range);
   map_.integrate_scan(usable, T_map_robot);
+  if (relocalization_) relocalization_->mapped.emplace_back(std::move(usable), T_map_robot);
   map_empty_ = false;
   last_update_pose_ = T_map_robot;
   ++map_updates_;
+}
+
+// The odometry's pose and Hector's at this scan, every half second (the drift over a gap is
+// measured on stretches of ten seconds and more).
+void HectorSlam::remember(double stamp, const HectorInputs& inputs) {
+  constexpr double kHistoryInterval = 0.5;  // s
+  if (config_.prior != MotionPrior::kOdometry || !inputs.T_odom_robot) return;
+  if (!history_.empty() && stamp - history_.back().stamp < kHistoryInterval) return;
+  history_.push_back({stamp, *inputs.T_odom_robot, *last_pose_});
+}
+
+// A gap in the scans ended: the map so far is set aside to be searched, with a window of the
+// odometry's drift over the gap (config), and a new map starts at the prediction. A gap while the
+// map before an earlier one is still searched for gives that search up: the map since then is
+// the one to find the robot in now.
+void HectorSlam::begin_relocalization(double gap) {
+  ++gap_stats_.gaps;
+  if (relocalization_) abandon_relocalization();
+  if (map_empty_) return;
+  const HectorRelocalizationConfig& c = config_.relocalization;
+  const Drift drift = odometry_drift_over(history_, gap);
+  if (c.sigmas * drift.translation <= c.track_translation && c.sigmas * drift.rotation <= c.track_rotation) {
+    ++gap_stats_.tracked;  // an odometry this good: the tracker's own match reaches the place
+    return;
+  }
+  history_.clear();
+  Relocalization r{.before = std::move(map_)};
+  // No window wider than the map: an unbounded drift (no odometry, too little seen) searches it all.
+  constexpr int kOccupied = 65;  // %, as the written map's (map_saver's)
+  const OccupancyMap before = r.before.level(0).to_occupancy_map();
+  const double widest = std::min(c.max_window, std::hypot(before.width, before.height) * before.resolution);
+  r.window = std::clamp(c.sigmas * drift.translation, std::min(c.min_window, widest), widest);
+  r.window_theta = std::clamp(c.sigmas * drift.rotation, c.min_window_theta, std::numbers::pi);
+  const PointCloud2 occupied = occupied_points(before, kOccupied);
+  r.coarse = make_match_map(occupied, coarse_search(c, r.window, r.window_theta));  // the table's levels fit the window
+  r.fine = make_match_map(occupied, c.fine);
+  r.first_scan = trajectory_.size();
+  relocalization_ = std::move(r);
+  restart_map();
+}
+
+// One attempt (every attempt_distance travelled since the gap): this scan searched for in the map
+// before the gap. A match that agrees with an earlier one of a scan at least confirm_min_distance
+// away relocalizes; after max_attempts Hector goes on in the new map.
+void HectorSlam::relocalize(const LaserScan& corrected, const HectorInputs& inputs) {
+  const HectorRelocalizationConfig& c = config_.relocalization;
+  Relocalization& r = *relocalization_;
+  if (trajectory_.size() >= 2 && trajectory_.size() - 1 > r.first_scan) {
+    r.path += (trajectory_.back().pose.translation() - trajectory_[trajectory_.size() - 2].pose.translation()).norm();
+  }
+  if (r.mapped.size() >= static_cast<std::size_t>(c.max_mapped_scans)) {
+    abandon_relocalization();
+    return;
+  }
+  // Candidates too far back along the path to be confirmed go; while one waits, the next attempt
+  // comes after attempt_distance, else after a share of the path since the gap.
+  std::erase_if(r.candidates, [&](const auto& candidate) { return r.path - candidate.second > c.confirm_max_distance; });
+  const double spacing = r.candidates.empty() ? std::max(c.attempt_distance, c.attempt_spacing * r.path) : c.attempt_distance;
+  if (r.attempts > 0 && r.path - r.attempted_at < spacing) return;
+  r.attempted_at = r.path;
+  ++r.attempts;
+  ++gap_stats_.attempts;
+  const std::optional<SE2> found = search_before_gap(corrected, inputs);
+  const std::optional<SE2> T_before_new = found ? std::optional<SE2>(*found * last_pose_->inverse()) : std::nullopt;
+  if (T_before_new && !contradicted(*T_before_new)) {
+    const SE2 correction = last_pose_->between(*found);
+    if (correction.translation().norm() <= c.track_translation && std::abs(correction.theta()) <= c.track_rotation) {
+      relocalize_at(*T_before_new);  // where the tracker's own match would have put it: no alias to fear
+      return;
+    }
+    for (const auto& [earlier, at] : r.candidates) {
+      const SE2 apart = (earlier * *last_pose_).between(*found);
+      if (r.path - at >= c.confirm_min_distance && apart.translation().norm() <= c.confirm_tolerance &&
+          std::abs(apart.theta()) <= c.confirm_rotation_tolerance) {
+        relocalize_at(*T_before_new);
+        return;
+      }
+    }
+    r.candidates.emplace_back(*T_before_new, r.path);
+  }
+  if (r.attempts >= c.max_attempts) abandon_relocalization();
+}
+
+// The scan's pose in the map before the gap, searched for around its pose in the new map (the
+// odometry's guess) over the window, coarse then fine; none unless the fine match passes the
+// thresholds.
+std::optional<SE2> HectorSlam::search_before_gap(const LaserScan& corrected, const HectorInputs& inputs) const {
+  const HectorRelocalizationConfig& c = config_.relocalization;
+  const Relocalization& r = *relocalization_;
+  PointCloud2 scan;
+  scan.points = usable_end_points(corrected, config_.min_range, config_.max_range);
+  if (inputs.attitude) scan.points = project_to_horizontal(scan.points, *inputs.attitude);
+  // The new map's own drift since the gap widens the window.
+  const double window = r.window + c.drift_per_metre * r.path;
+  const double window_theta = std::min(r.window_theta + c.drift_per_metre * r.path, std::numbers::pi);
+  const MatchResult found = match_correlative_map(r.coarse, scan, *last_pose_, coarse_search(c, window, window_theta));
+  if (!found.converged) return std::nullopt;
+  const MatchResult fine = match_correlative_map(r.fine, scan, found.T_target_source, c.fine);
+  if (!fine.converged || fine.degenerate || fine.score < c.min_score || fine.inlier_fraction < c.min_inlier_fraction) {
+    return std::nullopt;
+  }
+  return fine.T_target_source;
+}
+
+// Whether the map before the gap contradicts the new map moved by T_before_new: more than
+// max_contradiction of the new map's occupied cells that land where the old map saw anything land
+// on cells it saw free (none of its occupied cells within verify_distance). A corridor matched a
+// few doors along, a room matched in its twin: the scan fits, the walls beyond it do not.
+bool HectorSlam::contradicted(const SE2& T_before_new) const {
+  const HectorRelocalizationConfig& c = config_.relocalization;
+  const Relocalization& r = *relocalization_;
+  constexpr int kOccupied = 65;   // %, as the written map's
+  constexpr double kFree = 0.25;  // P(occupied) below which a cell was seen free
+  const PointCloud2& before = r.fine.grid.target();
+  std::size_t seen = 0;
+  std::size_t contradicting = 0;
+  for (const Point2& point : occupied_points(map_.level(0).to_occupancy_map(), kOccupied).points) {
+    const Point2 p = T_before_new * point;
+    const Neighbor nearest = r.fine.grid.tree().nearest(p);
+    if (nearest.index < before.size() && nearest.squared_distance <= c.verify_distance * c.verify_distance) {
+      ++seen;
+    } else if (r.before.level(0).probability(p) < kFree) {
+      ++seen;
+      ++contradicting;
+    }
+  }
+  return seen == 0 || static_cast<double>(contradicting) > c.max_contradiction * static_cast<double>(seen);
+}
+
+// The new map's scans go into the map before the gap at their poses moved by T_before_new, which
+// becomes the map; every pose since the gap moves with them.
+void HectorSlam::relocalize_at(const SE2& T_before_new) {
+  Relocalization& r = *relocalization_;
+  for (const auto& [scan, pose] : r.mapped) r.before.integrate_scan(scan, T_before_new * pose);
+  map_ = std::move(r.before);
+  map_empty_ = false;
+  std::vector<StampedPose> poses = trajectory_.poses();
+  for (std::size_t i = r.first_scan; i < poses.size(); ++i) poses[i].pose = T_before_new * poses[i].pose;
+  trajectory_ = Trajectory(std::move(poses));
+  for (OdometryAndEstimate& pair : history_) pair.estimate = T_before_new * pair.estimate;
+  last_pose_ = T_before_new * *last_pose_;
+  if (previous_pose_) previous_pose_ = T_before_new * *previous_pose_;
+  last_moved_pose_ = T_before_new * last_moved_pose_;
+  last_update_pose_ = T_before_new * last_update_pose_;
+  last_covariance_ = rotate_covariance(last_covariance_, T_before_new.theta());
+  ++gap_stats_.relocalized;
+  relocalization_.reset();
+}
+
+void HectorSlam::abandon_relocalization() {
+  earlier_maps_.push_back(relocalization_->before.level(0).to_occupancy_map());
+  ++gap_stats_.abandoned;
+  relocalization_.reset();
+}
+
+OccupancyMap HectorSlam::occupancy_map() const {
+  OccupancyMap map;
+  for (const OccupancyMap& earlier : earlier_maps_) map = overlay(map, earlier);
+  if (relocalization_) map = overlay(map, relocalization_->before.level(0).to_occupancy_map());
+  return overlay(map, map_.level(0).to_occupancy_map());
 }
 
 }  // namespace slam2d

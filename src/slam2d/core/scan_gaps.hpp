@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Gaps in the scans (the logger paused, the laser dropped out) and how far the odometry may have
+// drifted across one. Across a gap only the odometry tells where the robot went; how much it can
+// be trusted there is measured on the data before the gap, not assumed: the largest disagreement
+// between the odometry's motion and the method's estimate over any stretch as long as the gap.
+// Graph SLAM weighs its edge across the gap and bounds its loop closer's search with it, Hector
+// bounds its search for its place in the map before the gap (docs/methods/graph_slam.md,
+// docs/methods/hector.md, "Across a gap in the scans").
+
+#include <cstddef>
+#include <span>
+
+#include "slam2d/core/config_fields.hpp"
+#include "slam2d/core/se2.hpp"
+
+namespace slam2d {
+
+// A scan more than max(seconds, periods x the typical interval between scans) after the one before
+// ends a gap. Where nothing was seen before the gap to measure the odometry's drift on, it is that
+// of a path of `speed` x the gap's duration (graph SLAM also counts that distance as travelled).
+struct ScanGapConfig {
+  double seconds = 10.0;
+  double periods = 20.0;
+  double speed = 1.0;
+};
+
+template <typename Fields>
+void describe(Fields& f, ScanGapConfig& c) {
+  f.number("seconds", c.seconds, "s", greater_than(0), "a scan at least this long after the one before ends a gap in the scans ...");
+  f.number("periods", c.periods, "1", at_least(1), "... and at least this many typical scan intervals");
+  f.number("speed", c.speed, "m/s", greater_than(0),
+           "without a measured drift, the odometry's noise across a gap is that of a path this fast for the gap's duration");
+}
+
+/// Throws Error for out-of-range values.
+void validate(const ScanGapConfig& config);
+
+/// Tells, scan by scan, whether a scan ends a gap. The typical interval is a running mean over the
+/// intervals that end none.
+class ScanGapDetector {
+ public:
+  explicit ScanGapDetector(const ScanGapConfig& config = {});
+  /// The seconds since the scan before when the scan at `stamp` ends a gap, else 0.
+  double gap_before(double stamp);
+  std::size_t gaps() const { return gaps_; }
+
+ private:
+  ScanGapConfig config_;
+  bool started_ = false;
+  double last_stamp_ = 0.0;
+  double typical_interval_ = 0.0;  // s; 0 until two scans were seen
+  std::size_t gaps_ = 0;
+};
+
+/// A drift in translation and heading (standard deviations, or a largest disagreement).
+struct Drift {
+  double translation = 0.0;  // m
+  double rotation = 0.0;     // rad
+};
+
+/// The odometry's pose and the method's estimate at one stamp.
+struct OdometryAndEstimate {
+  double stamp = 0.0;
+  SE2 odometry;
+  SE2 estimate;
+};
+
+/// How far the odometry drifted from the estimate over stretches of `duration` seconds of
+/// `history` (in stamp order, since the last gap): the largest disagreement of the two motions over
+/// such a stretch, in translation and in heading, times duration / the stretch where less than
+/// `duration` was seen. Unbounded (infinite) with fewer than two poses or with less than a quarter of
+/// `duration` seen.
+Drift odometry_drift_over(std::span<const OdometryAndEstimate> history, double duration);
+
+}  // namespace slam2d
