@@ -291,7 +291,7 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
                                        stats.rejected_large_closures));
   }
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
-  run.method_summary.add("scan_gaps", stats.gaps);
+  run.method_summary.add("scan_gaps", stats.gaps).add("gaps_tracked_through", stats.gaps_tracked_through);
   run.method_summary.add("optimization_iterations", stats.optimization_iterations)
       .add("deferred_optimizations", stats.deferred_optimizations);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));

@@ -31,6 +31,10 @@ double ScanGapDetector::gap_before(double stamp) {
   return 0.0;
 }
 
+bool within_tracker_reach(const ScanGapConfig& config, double window, double window_theta) {
+  return window <= config.track_translation && window_theta <= config.track_rotation;
+}
+
 Drift odometry_drift_over(std::span<const OdometryAndEstimate> history, double duration) {
   constexpr double kUnbounded = std::numeric_limits<double>::infinity();
   constexpr double kLeastHistory = 0.25;

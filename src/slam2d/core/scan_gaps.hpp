@@ -19,10 +19,15 @@ namespace slam2d {
 // A scan more than max(seconds, periods x the typical interval between scans) after the one before
 // ends a gap. Where nothing was seen before the gap to measure the odometry's drift on, it is that
 // of a path of `speed` x the gap's duration (graph SLAM also counts that distance as travelled).
+// A gap across which the search window over the odometry's drift (three sigmas of it) stays within
+// the tracker's reach from the odometry's prediction (track_*: Hector's pyramid's coarsest cells are 0.2 m, its rotation search
+// 0.2 rad) is tracked through on the old map: the odometry is good enough there.
 struct ScanGapConfig {
   double seconds = 10.0;
   double periods = 20.0;
   double speed = 1.0;
+  double track_translation = 1.0;  // m
+  double track_rotation = 0.3;     // rad
 };
 
 template <typename Fields>
@@ -31,7 +36,13 @@ void describe(Fields& f, ScanGapConfig& c) {
   f.number("periods", c.periods, "1", at_least(1), "... and at least this many typical scan intervals");
   f.number("speed", c.speed, "m/s", greater_than(0),
            "without a measured drift, the odometry's noise across a gap is that of a path this fast for the gap's duration");
+  f.number("track_translation", c.track_translation, "m", at_least(0),
+           "the tracker's reach: a gap across whose odometry drift the search window is at most this ...");
+  f.number("track_rotation", c.track_rotation, "rad", at_least(0), "... and this is tracked through on the old map");
 }
+
+/// A search window over the odometry's drift across a gap (m, rad) within the tracker's reach.
+bool within_tracker_reach(const ScanGapConfig& config, double window, double window_theta);
 
 /// Throws Error for out-of-range values.
 void validate(const ScanGapConfig& config);
@@ -58,6 +69,7 @@ struct Drift {
   double translation = 0.0;  // m
   double rotation = 0.0;     // rad
 };
+
 
 /// The odometry's pose and the method's estimate at one stamp.
 struct OdometryAndEstimate {

@@ -342,7 +342,7 @@ TEST(HectorSlam, WritesTheMapBeforeAGapItHasNotPlacedBeneathTheNewOne) {
   const SimulatedRun& run = office_run();
   const std::vector<const LaserMessage*> lasers = laser_messages(run);
   HectorSlamConfig config;
-  config.relocalization.track_translation = config.relocalization.track_rotation = 0.0;
+  config.relocalization.gap.track_translation = config.relocalization.gap.track_rotation = 0.0;
   config.relocalization.confirm_min_distance = config.relocalization.confirm_max_distance = 1e6;
   HectorSlam slam(config);
   for (const LaserMessage* laser : lasers) {

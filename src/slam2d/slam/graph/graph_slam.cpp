@@ -108,8 +108,14 @@ GraphSlamStep GraphSlam::add_scan(const LaserScan& scan, const std::optional<SE2
   GraphSlamStep step;
   const double gap = gaps_.gap_before(scan.stamp);
   if (gap > 0.0 && tracker_) {
-    tracker_->restart_map();
     ++stats_.gaps;
+    const Drift drift = odometry_drift_over(gap);
+    const double sigmas = config_.loop_closure.uncertainty_sigmas;
+    if (within_tracker_reach(config_.gap, sigmas * drift.translation, sigmas * drift.rotation)) {
+      ++stats_.gaps_tracked_through;  // the odometry is good enough: the tracker's map stays
+    } else {
+      tracker_->restart_map();
+    }
   }
   const HectorStep tracked = track(scan, T_odom_robot);
   const bool first = keyframes_.empty();

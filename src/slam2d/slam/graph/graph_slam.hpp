@@ -123,7 +123,8 @@ struct GraphSlamConfig {
   // A gap in the scans (core/scan_gaps.hpp: the logger paused, the laser dropped out). Across it
   // only the odometry tells where the robot went, so:
   // - the tracker starts a new local map (the old one would pull the new scans onto the wrong
-  //   place when the odometry is off);
+  //   place when the odometry is off), unless the loop closer's window over the odometry's drift
+  //   (below) stays within the tracker's reach (gap.track_*);
   // - the scan becomes a keyframe whose edge holds the odometry's increment with the odometry's own
   //   drift over that time, measured before the gap (core/scan_gaps.hpp's odometry_drift_over
   //   against the graph's estimate since the last gap; on the sequential floor; heading sigma at
@@ -197,6 +198,7 @@ struct GraphSlamStats {
   std::size_t deferred_optimizations = 0;   // closures whose optimisation was deferred (they agreed)
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   std::size_t gaps = 0;                 // gaps in the scans (gap)
+  std::size_t gaps_tracked_through = 0; // ... across which the tracker kept its map (gap.track_*)
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
   std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
   MotionFusionStats fusion;             // the two edges of each keyframe step: consistent, or which was surer

@@ -313,7 +313,7 @@ void HectorSlam::begin_relocalization(double gap) {
   if (map_empty_) return;
   const HectorRelocalizationConfig& c = config_.relocalization;
   const Drift drift = odometry_drift_over(history_, gap);
-  if (c.sigmas * drift.translation <= c.track_translation && c.sigmas * drift.rotation <= c.track_rotation) {
+  if (within_tracker_reach(c.gap, c.sigmas * drift.translation, c.sigmas * drift.rotation)) {
     ++gap_stats_.tracked;  // an odometry this good: the tracker's own match reaches the place
     return;
   }
@@ -358,7 +358,7 @@ void HectorSlam::relocalize(const LaserScan& corrected, const HectorInputs& inpu
   const std::optional<SE2> T_before_new = found ? std::optional<SE2>(*found * last_pose_->inverse()) : std::nullopt;
   if (T_before_new && !contradicted(*T_before_new)) {
     const SE2 correction = last_pose_->between(*found);
-    if (correction.translation().norm() <= c.track_translation && std::abs(correction.theta()) <= c.track_rotation) {
+    if (within_tracker_reach(c.gap, correction.translation().norm(), std::abs(correction.theta()))) {
       relocalize_at(*T_before_new);  // where the tracker's own match would have put it: no alias to fear
       return;
     }

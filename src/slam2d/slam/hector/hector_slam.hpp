@@ -46,8 +46,8 @@ constexpr auto choices(MotionPrior) {
 // missing: 18.7 m on the relations across the gap, the odometry alone 13.9 m). So:
 // - the window is `sigmas` x the odometry's drift over the gap, measured on the scans before it
 //   against Hector's own poses (core/scan_gaps.hpp's odometry_drift_over; without odometry or
-//   history, the whole map and every heading). Within the tracker's reach (track_*) the gap is
-//   tracked through on the old map, as before;
+//   history, the whole map and every heading). Within the tracker's reach (gap.track_*) the gap
+//   is tracked through on the old map, as before;
 // - else Hector starts a new map at the prediction and searches the old one for where it is: each
 //   scan (every attempt_distance travelled, later every attempt_spacing of the path since the gap)
 //   is matched against the old map's occupied cells, coarse then fine, over the window;
@@ -65,11 +65,6 @@ struct HectorRelocalizationConfig {
   bool enabled = true;  // graph SLAM's tracker: ignored (graph SLAM restarts it; its loop closer searches)
   ScanGapConfig gap{};
   double sigmas = 3.0;
-  // The tracker's reach from the odometry's prediction: a gap across which the window is no wider
-  // is tracked through on the old map, as before; a match within it of the pose in the new map
-  // relocalizes alone (no confirmation: it is where the tracker's own match would have gone).
-  double track_translation = 1.0;  // m
-  double track_rotation = 0.3;     // rad
   double min_window = 0.5;         // m
   double max_window = 100.0;       // m; and never wider than the map
   double min_window_theta = 0.1;   // rad
@@ -97,10 +92,6 @@ void describe(Fields& f, HectorRelocalizationConfig& c) {
   f.flag("enabled", c.enabled, "after a gap in the scans, search the map before it (graph SLAM's tracker: ignored)");
   f.section("gap", c.gap, "what is a gap in the scans");
   f.number("sigmas", c.sigmas, "1", greater_than(0), "the search window: this many times the odometry's drift over the gap ...");
-  f.number("track_translation", c.track_translation, "m", at_least(0),
-           "the tracker's reach: a gap whose window is at most this ...");
-  f.number("track_rotation", c.track_rotation, "rad", at_least(0),
-           "... and this is tracked through on the old map; a match this near the pose relocalizes alone");
   f.number("min_window", c.min_window, "m", greater_than(0), "... at least this ...");
   f.number("max_window", c.max_window, "m", greater_than(0), "... and at most this or the map's diagonal (also without a measured drift)");
   f.number("min_window_theta", c.min_window_theta, "rad", greater_than(0), "the heading window at least this (at most pi)");
@@ -285,7 +276,7 @@ struct HectorStep {
 struct HectorGapStats {
   std::size_t gaps = 0;
   std::size_t attempts = 0;     // scans matched against the map before a gap
-  std::size_t tracked = 0;      // gaps the odometry bridged well enough to track through (track_*)
+  std::size_t tracked = 0;      // gaps the odometry bridged well enough to track through (gap.track_*)
   std::size_t relocalized = 0;  // gaps after which Hector found its place in the map before it
   std::size_t abandoned = 0;    // ... and after which it went on in a new map (max_attempts, the next gap)
 };
