@@ -277,7 +277,8 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   run.method_summary.add("global_searches", stats.global_searches).add("global_closures", stats.global_closures);
   run.method_summary.add("large_closures", stats.large_closures).add("unconfirmed_closures", stats.unconfirmed_closures);
   run.method_summary.add("final_search_closures", stats.final_search_closures)
-      .add("rejected_large_closures", stats.rejected_large_closures);
+      .add("rejected_large_closures", stats.rejected_large_closures)
+      .add("contradicted_large_closures", stats.contradicted_large_closures);
   run.method_summary.add("global_search_s", stats.global_search_seconds);
   if (stats.unconfirmed_closures > 0) {  // graph SLAM could not decide: say so instead of bending the map
     run.warnings.push_back(fmt::format("graph: {} large loop corrections found but not confirmed by a second keyframe "

@@ -18,8 +18,15 @@ std::vector<SensorMessage> read_log(const std::filesystem::path& log, const Carm
 
 std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log, const std::string& fault,
                                                std::uint64_t seed) {
+  return read_log_with_faults(log, {fault}, seed);
+}
+
+std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log, const std::vector<std::string>& faults,
+                                                std::uint64_t seed) {
   std::vector<SensorMessage> messages = read_log(log);
-  apply_faults({parse_fault(fault)}, messages, seed);
+  std::vector<Fault> parsed;
+  for (const std::string& fault : faults) parsed.push_back(parse_fault(fault));
+  apply_faults(parsed, messages, seed);
   return messages;
 }
 

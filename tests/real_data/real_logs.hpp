@@ -21,6 +21,9 @@ std::vector<SensorMessage> read_log(const std::filesystem::path& log, const Carm
 /// FAULT --seed SEED` does it to the messages it reads.
 std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log, const std::string& fault,
                                                std::uint64_t seed = 1);
+/// Several faults in order, as several --fault options do.
+std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log, const std::vector<std::string>& faults,
+                                                std::uint64_t seed = 1);
 
 /// The laser messages, in order, moved out of `messages`.
 std::vector<LaserMessage> laser_messages(std::vector<SensorMessage> messages);

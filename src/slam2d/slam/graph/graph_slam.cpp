@@ -14,6 +14,7 @@
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/occupancy_grid.hpp"
+#include "slam2d/registration/free_space_check.hpp"
 #include "slam2d/registration/match_fusion.hpp"
 #include "slam2d/registration/normals.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
@@ -271,6 +272,12 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   };
   std::vector<LoopClosure> large;
   std::copy_if(closures.begin(), closures.end(), std::back_inserter(large), checked);
+  if (std::any_of(large.begin(), large.end(), [&](const LoopClosure& closure) { return contradicted(closure); })) {
+    ++stats_.contradicted_large_closures;  // a confirmed pair the old map's free space refutes
+    std::vector<LoopClosure> kept;
+    std::copy_if(closures.begin(), closures.end(), std::back_inserter(kept), [&](const LoopClosure& c) { return !checked(c); });
+    return add_closures(kept, final);
+  }
   const std::vector<LoopClosure> large_added = large.empty() ? large : supported_large_closures(large);
   const bool new_large_added = !large_added.empty();
   // The remembered ones that went in with them follow the new ones (none when those were refused).
@@ -300,6 +307,38 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     for (const LoopClosure& closure : remembered_added) recheck_near(closure.keyframe);
   }
   return static_cast<int>(closures.size());
+}
+
+// Whether the map before a large correction contradicts the recent keyframes moved by it
+// (loop_closure.large.max_contradiction): their walls (end points) moved by the correction against an
+// occupancy grid of the keyframes within verify_radius of the match up to the chain's end.
+bool GraphSlam::contradicted(const LoopClosure& closure) const {
+  const LargeClosureConfig& c = config_.loop_closure.large;
+  if (c.max_contradiction >= 1.0) return false;
+  const Keyframe& current = keyframes_[closure.keyframe];
+  const SE2 correction = closure.T_map_matched * graph_.poses[current.node].inverse();
+  // Recent: back along the path from the keyframe, to the last gap or verify_radius.
+  std::vector<Point2> recent;
+  std::size_t first_recent = closure.keyframe + 1;
+  while (first_recent > 0 && current.path_distance - keyframes_[first_recent - 1].path_distance <= c.verify_radius) {
+    --first_recent;
+    const Keyframe& k = keyframes_[first_recent];
+    const SE2 moved = correction * graph_.poses[k.node];
+    for (const Point2& p : k.cloud.points) recent.push_back(moved * p);
+    if (k.after_gap) break;
+  }
+  // Old: the keyframes before the recent ones, up to the chain's end, near the match.
+  OccupancyGrid before(OccupancyGridConfig{.resolution = config_.map_resolution, .max_range = config_.max_range});
+  const std::size_t end = std::min(closure.chain_end, first_recent);
+  for (std::size_t i = 0; i < end; ++i) {
+    const SE2& pose = graph_.poses[keyframes_[i].node];
+    if (keyframes_[i].released || (pose.translation() - closure.T_map_matched.translation()).norm() > c.verify_radius) continue;
+    before.integrate_scan(keyframe_scans_[i], pose);
+  }
+  constexpr int kOccupied = 65;  // %, as the written map's
+  const PointCloud2 wall_points = occupied_points(before.to_occupancy_map(), kOccupied);
+  const KdTree2 walls(wall_points.points);  // indexes the points in place
+  return check_free_space(before, walls, recent, c.verify_distance).contradicted(c.max_contradiction);
 }
 
 // A closure that went in: its anchor kept on its keyframe (what the lifelong budget's release

@@ -199,6 +199,7 @@ struct GraphSlamStats {
   std::size_t sequential_failures = 0;  // keyframes whose tracker match was degenerate
   std::size_t gaps = 0;                 // gaps in the scans (gap)
   std::size_t gaps_tracked_through = 0; // ... across which the tracker kept its map (gap.track_*)
+  std::size_t contradicted_large_closures = 0;  // confirmed pairs refused by the old map's free space
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
   std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
   MotionFusionStats fusion;             // the two edges of each keyframe step: consistent, or which was surer
@@ -254,6 +255,7 @@ class GraphSlam {
   void add_keyframe(const LaserScan& scan, const SE2& estimate, const HectorStep& tracked,
                     const std::optional<SE2>& T_odom_robot, bool matched, double gap);
   Covariance3 sequential_covariance(const HectorStep& tracked) const;
+  bool contradicted(const LoopClosure& closure) const;
   Drift odometry_drift_over(double duration) const;  // since the last gap (core/scan_gaps.hpp)
   Covariance3 gap_covariance(const SE2& increment, double gap, const Drift& drift) const;
   void accumulate_odometry(const HectorStep& tracked);

@@ -100,6 +100,13 @@ struct LargeClosureConfig {
   // is the tracker's, good to centimetres over a few metres).
   double confirm_tolerance = 0.25;
   double confirm_rotation_tolerance = 0.05;
+  // A confirmed large correction is refused where the map before it contradicts the keyframes
+  // since the last gap (or within verify_radius of the path back) moved by it: more than
+  // max_contradiction of their walls on its free space (registration/free_space_check.hpp; the
+  // old map: the keyframes within verify_radius of the match, up to the chain's end). 1: off.
+  double max_contradiction = 0.15;
+  double verify_distance = 0.2;
+  double verify_radius = 8.0;
   MapMatchConfig confirm_match{.correlative = {.resolution = 0.05, .sigma = 0.05, .window_x = 0.5, .window_y = 0.5,
                                                .window_theta = 0.1, .angular_step = 0.004, .min_score = 0.5},
                                .refinement = {.max_correspondence_distance = 0.3},
@@ -136,6 +143,10 @@ void describe(Fields& f, LargeClosureConfig& c) {
   f.number("confirm_tolerance", c.confirm_tolerance, "m", greater_than(0),
            "the second match must land this near the predicted pose ...");
   f.number("confirm_rotation_tolerance", c.confirm_rotation_tolerance, "rad", greater_than(0), "... and turned this near");
+  f.number("max_contradiction", c.max_contradiction, "1", between(0, 1),
+           "a confirmed correction is refused when more than this share of the recent keyframes' walls, moved by it, fall on the old map's free space");
+  f.number("verify_distance", c.verify_distance, "m", greater_than(0), "a moved wall this near an old one agrees");
+  f.number("verify_radius", c.verify_radius, "m", greater_than(0), "the keyframes checked: within this of the match (old) and along the path back (recent)");
   f.section("confirm_match", c.confirm_match, "the confirming match (small window)");
   f.flag("global_search", c.global_search, "search over the whole drift uncertainty");
   f.number("global_interval", c.global_interval, "keyframes", at_least(1), "at most one global search per this many");

@@ -9,7 +9,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/odometry.hpp"
-#include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/free_space_check.hpp"
 
 namespace slam2d {
 
@@ -401,24 +401,12 @@ std::optional<SE2> HectorSlam::search_before_gap(const LaserScan& corrected, con
 // on cells it saw free (none of its occupied cells within verify_distance). A corridor matched a
 // few doors along, a room matched in its twin: the scan fits, the walls beyond it do not.
 bool HectorSlam::contradicted(const SE2& T_before_new) const {
-  const HectorRelocalizationConfig& c = config_.relocalization;
+  constexpr int kOccupied = 65;  // %, as the written map's
+  PointCloud2 walls = occupied_points(map_.level(0).to_occupancy_map(), kOccupied);
+  for (Point2& point : walls.points) point = T_before_new * point;
   const Relocalization& r = *relocalization_;
-  constexpr int kOccupied = 65;   // %, as the written map's
-  constexpr double kFree = 0.25;  // P(occupied) below which a cell was seen free
-  const PointCloud2& before = r.fine.grid.target();
-  std::size_t seen = 0;
-  std::size_t contradicting = 0;
-  for (const Point2& point : occupied_points(map_.level(0).to_occupancy_map(), kOccupied).points) {
-    const Point2 p = T_before_new * point;
-    const Neighbor nearest = r.fine.grid.tree().nearest(p);
-    if (nearest.index < before.size() && nearest.squared_distance <= c.verify_distance * c.verify_distance) {
-      ++seen;
-    } else if (r.before.level(0).probability(p) < kFree) {
-      ++seen;
-      ++contradicting;
-    }
-  }
-  return seen == 0 || static_cast<double>(contradicting) > c.max_contradiction * static_cast<double>(seen);
+  return check_free_space(r.before.level(0), r.fine.grid.tree(), walls.points, config_.relocalization.verify_distance)
+      .contradicted(config_.relocalization.max_contradiction);
 }
 
 // The new map's scans go into the map before the gap at their poses moved by T_before_new, which
