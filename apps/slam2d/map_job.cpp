@@ -66,6 +66,12 @@ void report_odometry(MappingRun& run, const OdometryGuardStats& stats) {
   for (std::string& warning : odometry_warnings(stats)) run.warnings.push_back(std::move(warning));
 }
 
+// Gaps in the scans and the searches after them (Hector, the RBPF), into the run.
+void report_gaps(MappingRun& run, const GapStats& gaps) {
+  run.method_summary.add("scan_gaps", gaps.gaps).add("gaps_tracked_through", gaps.tracked).add("gap_relocalizations", gaps.relocalized);
+  run.method_summary.add("gap_relocalization_attempts", gaps.attempts).add("gaps_not_relocalized", gaps.abandoned);
+}
+
 // Where each scan's odometry pose comes from (MapJobOptions::odometry_source, resolved).
 struct OdometryFeed {
   enum class Kind { kLog, kNone, kTrajectory, kPerScan };
@@ -238,9 +244,7 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
   run.map = slam.occupancy_map();
   run.resolution = config.map.grid.resolution;
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
-  const HectorGapStats& gaps = slam.gap_stats();
-  run.method_summary.add("scan_gaps", gaps.gaps).add("gaps_tracked_through", gaps.tracked).add("gap_relocalizations", gaps.relocalized);
-  run.method_summary.add("gap_relocalization_attempts", gaps.attempts).add("gaps_not_relocalized", gaps.abandoned);
+  report_gaps(run, slam.gap_stats());
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
     if (config.fuse_odometry) {
@@ -321,6 +325,10 @@ MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed)
   // rbpf without wheel odometry) come from the same scans, so how well they agree with the matches
   // says nothing of their noise: the fixed weak prior there.
   if (!feed.is_own_sensor()) config.scan_odometry_prior_from_motion_noise = false;
+  // Across a gap Hector's poses are Hector's search's of the same scans: the filter's own search
+  // would only add its new map's drift (ACES with 198 s of scans removed, hector+rbpf: 0.299 m over
+  // all relations without it, 0.566 m with it).
+  if (!feed.is_own_sensor()) config.relocalization.enabled = false;
   if (options.particles) config.particles = *options.particles;
   if (options.seed) config.seed = *options.seed;
   if (options.threads) config.threads = *options.threads;
@@ -330,8 +338,9 @@ MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed)
     return slam.add_scan(laser.scan, *odometry).T_map_robot;
   });
   run.trajectory = slam.trajectory();
-  run.map = slam.map().to_occupancy_map();
+  run.map = slam.occupancy_map();
   run.resolution = config.map.grid.resolution;
+  report_gaps(run, slam.gap_stats());
   const RbpfStats& stats = slam.stats();
   run.method_summary.add("particles", config.particles).add("seed", static_cast<std::size_t>(config.seed));
   run.method_summary.add("threads", config.threads);

@@ -269,7 +269,7 @@ PYBIND11_MODULE(_slam2d, m) {
       }, py::arg("scan"), py::arg("odom") = py::none())
       .def("finish", [](RbpfSlam&) {})
       .def_property_readonly("trajectory", [](const RbpfSlam& slam) { return trajectory_array(slam.trajectory()); })
-      .def_property_readonly("map", [](const RbpfSlam& slam) { return map_dict(slam.map().to_occupancy_map()); });
+      .def_property_readonly("map", [](const RbpfSlam& slam) { return map_dict(slam.occupancy_map()); });
 
   // A localizer in a known map, with the map it reads (the session follows the robot through
   // odometry stalls, as `slam2d localize` does).

@@ -35,6 +35,11 @@ bool within_tracker_reach(const ScanGapConfig& config, double window, double win
   return window <= config.track_translation && window_theta <= config.track_rotation;
 }
 
+void add_to_history(std::vector<OdometryAndEstimate>& history, const OdometryAndEstimate& pair) {
+  constexpr double kInterval = 0.5;  // s
+  if (history.empty() || pair.stamp - history.back().stamp >= kInterval) history.push_back(pair);
+}
+
 Drift odometry_drift_over(std::span<const OdometryAndEstimate> history, double duration) {
   constexpr double kUnbounded = std::numeric_limits<double>::infinity();
   constexpr double kLeastHistory = 0.25;

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 #include "slam2d/core/config_fields.hpp"
 #include "slam2d/core/se2.hpp"
@@ -77,6 +78,10 @@ struct OdometryAndEstimate {
   SE2 odometry;
   SE2 estimate;
 };
+
+/// Appends `pair` to `history` unless it comes less than half a second after the last one: poses
+/// enough to measure the drift over a gap of ten seconds and more, a bounded number per second.
+void add_to_history(std::vector<OdometryAndEstimate>& history, const OdometryAndEstimate& pair);
 
 /// How far the odometry drifted from the estimate over stretches of `duration` seconds of
 /// `history` (in stamp order, since the last gap): the largest disagreement of the two motions over

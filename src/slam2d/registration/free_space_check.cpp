@@ -1,7 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "slam2d/registration/free_space_check.hpp"
 
+#include "slam2d/core/occupancy_map.hpp"
+
 namespace slam2d {
+
+PointCloud2 wall_points(const OccupancyGrid& map) {
+  constexpr int kOccupied = 65;  // %, as map_saver's
+  return occupied_points(map.to_occupancy_map(), kOccupied);
+}
 
 FreeSpaceCheck check_free_space(const OccupancyGrid& map, const KdTree2& walls, std::span<const Point2> points,
                                 double distance) {

@@ -24,6 +24,9 @@ struct FreeSpaceCheck {
   }
 };
 
+/// A map's walls: the centres of its cells at least 65 % occupied (the written map's threshold).
+PointCloud2 wall_points(const OccupancyGrid& map);
+
 /// `points` (in the map's frame) against the map: a point within `distance` of one of its walls
 /// (`walls`, its occupied cells' centres, indexed) agrees; one on a cell it saw free (P(occupied)
 /// below 0.25) with no wall that near contradicts; unknown cells say nothing.

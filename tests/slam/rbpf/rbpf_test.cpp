@@ -317,6 +317,67 @@ TEST(RbpfSlam, ReleasesALongPathWithoutDeepRecursion) {
   SUCCEED();
 }
 
+// 30 s of scans missing, over an odometry that turns 0.05 rad a metre too little: crossing the gap
+// as one long step, the first scan after it matches a wrong place (ATE > 0.5 m); the filter waits,
+// maps the scans after the gap anew and finds them in the best particle's map (ATE < 0.1 m). The true
+// poses as the odometry: its drift measured before the gap is within the per-scan matching's
+// reach, and the gap is crossed as before.
+TEST(RbpfSlam, FindsItsPlaceInTheOldMapAfterAGap) {
+  const SimulatedRun& run = test::simulated_office(150.0, 4);
+  const std::vector<const LaserMessage*> lasers = laser_messages(run);
+  const std::vector<SE2> drifting = test::odometry_with_heading_drift(run, 0.05);
+  const auto map_across_gap = [&](bool relocalize, bool exact = false) {
+    RbpfConfig config;
+    config.particles = 10;
+    config.relocalization.enabled = relocalize;
+    RbpfSlam slam(config);
+    Trajectory truth;
+    for (std::size_t i = 0; i < lasers.size(); ++i) {
+      if (lasers[i]->scan.stamp >= 100.0 && lasers[i]->scan.stamp < 130.0) continue;
+      slam.add_scan(lasers[i]->scan, exact ? run.truth[i].pose : drifting[i]);
+      truth.push_back(lasers[i]->scan.stamp, run.truth[i].pose);
+    }
+    EXPECT_EQ(slam.trajectory().size(), truth.size());
+    return std::pair{slam.gap_stats(), absolute_trajectory_error(slam.trajectory(), truth).rmse};
+  };
+  const auto [stats, rmse] = map_across_gap(true);
+  const auto [without_stats, without] = map_across_gap(false);
+  const auto [exact_stats, exact] = map_across_gap(true, true);
+  EXPECT_EQ(stats.gaps, 1u);
+  EXPECT_EQ(stats.relocalized, 1u);
+  EXPECT_LT(rmse, 0.1);
+  EXPECT_EQ(without_stats.gaps, 0u);
+  EXPECT_GT(without, 0.5);
+  EXPECT_EQ(exact_stats.tracked, 1u);
+  EXPECT_EQ(exact_stats.relocalized, 0u);
+  EXPECT_LT(exact, 0.05);
+}
+
+// While the filter searches (here never confirmed, nor a match taken alone), the scans since the
+// gap are in the trajectory at their poses in the new map, and the written map holds the best
+// particle's map beneath the new one.
+TEST(RbpfSlam, WritesTheScansSinceAGapItHasNotPlacedInTheTrajectoryAndTheMap) {
+  const SimulatedRun& run = test::simulated_office(150.0, 4);
+  RbpfConfig config;
+  config.particles = 5;
+  config.relocalization.gap.track_translation = config.relocalization.gap.track_rotation = 0.0;
+  config.relocalization.confirm_min_distance = config.relocalization.confirm_max_distance = 1e6;
+  RbpfSlam slam(config);
+  std::size_t added = 0;
+  for (const LaserMessage* laser : laser_messages(run)) {
+    if (laser->scan.stamp >= 100.0 && laser->scan.stamp < 130.0) continue;
+    slam.add_scan(laser->scan, laser->odom_pose);
+    ++added;
+  }
+  EXPECT_EQ(slam.gap_stats().gaps, 1u);
+  EXPECT_EQ(slam.gap_stats().relocalized, 0u);
+  EXPECT_EQ(slam.trajectory().size(), added);
+  const auto known = [](const OccupancyMap& map) {
+    return std::count_if(map.cells.begin(), map.cells.end(), [](std::int8_t c) { return c != OccupancyMap::kUnknown; });
+  };
+  EXPECT_GT(known(slam.occupancy_map()), known(slam.map().to_occupancy_map()));
+}
+
 TEST(RbpfSlam, RejectsBadConfiguration) {
   EXPECT_THROW(RbpfSlam({.particles = 0}), Error);
   EXPECT_THROW(RbpfSlam({.max_range = 0.0}), Error);

@@ -335,9 +335,8 @@ bool GraphSlam::contradicted(const LoopClosure& closure) const {
     if (keyframes_[i].released || (pose.translation() - closure.T_map_matched.translation()).norm() > c.verify_radius) continue;
     before.integrate_scan(keyframe_scans_[i], pose);
   }
-  constexpr int kOccupied = 65;  // %, as the written map's
-  const PointCloud2 wall_points = occupied_points(before.to_occupancy_map(), kOccupied);
-  const KdTree2 walls(wall_points.points);  // indexes the points in place
+  const PointCloud2 wall_cloud = wall_points(before);
+  const KdTree2 walls(wall_cloud.points);  // indexes the points in place
   return check_free_space(before, walls, recent, c.verify_distance).contradicted(c.max_contradiction);
 }
 

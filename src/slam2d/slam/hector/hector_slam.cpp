@@ -18,14 +18,6 @@ namespace {
 // A mean squared residual (1 - M)^2 never exceeds 1: no match is retried.
 constexpr double kNoRecovery = 1.0;
 
-// The coarse search of the map before a gap over the window.
-MapMatchConfig coarse_search(const HectorRelocalizationConfig& config, double window, double window_theta) {
-  MapMatchConfig coarse = config.coarse;
-  coarse.correlative.window_x = coarse.correlative.window_y = window;
-  coarse.correlative.window_theta = window_theta;
-  return coarse;
-}
-
 // The scan with each reading scaled to its horizontal length under the attitude (bearings kept:
 // their change is second order in roll and pitch), for the map update of a tilted scan.
 LaserScan levelled_scan(const LaserScan& scan, const Attitude& attitude) {
@@ -51,12 +43,9 @@ MapPyramidConfig map_config(const HectorSlamConfig& config) {
 void validate(const HectorSlamConfig& config) {
   check_fields(config, "HectorSlamConfig");
   check(config.max_range > config.min_range, "HectorSlamConfig: max_range must be > min_range");
-  check(config.relocalization.max_window >= config.relocalization.min_window,
-        "HectorSlamConfig: relocalization.max_window must be >= relocalization.min_window");
   validate(config.matcher);
   validate(config.odometry_noise);
-  validate(config.relocalization.coarse);
-  validate(config.relocalization.fine);
+  validate(config.relocalization);
 }
 
 HectorSlam::HectorSlam(const HectorSlamConfig& config)
@@ -297,10 +286,8 @@ void HectorSlam::integrate(const LaserScan& scan, const HectorInputs& inputs, co
 // The odometry's pose and Hector's at this scan, every half second (the drift over a gap is
 // measured on stretches of ten seconds and more).
 void HectorSlam::remember(double stamp, const HectorInputs& inputs) {
-  constexpr double kHistoryInterval = 0.5;  // s
   if (config_.prior != MotionPrior::kOdometry || !inputs.T_odom_robot) return;
-  if (!history_.empty() && stamp - history_.back().stamp < kHistoryInterval) return;
-  history_.push_back({stamp, *inputs.T_odom_robot, *last_pose_});
+  add_to_history(history_, {stamp, *inputs.T_odom_robot, *last_pose_});
 }
 
 // A gap in the scans ended: the map so far is set aside to be searched, with a window of the
@@ -311,102 +298,36 @@ void HectorSlam::begin_relocalization(double gap) {
   ++gap_stats_.gaps;
   if (relocalization_) abandon_relocalization();
   if (map_empty_) return;
-  const HectorRelocalizationConfig& c = config_.relocalization;
+  const GapRelocalizationConfig& c = config_.relocalization;
   const Drift drift = odometry_drift_over(history_, gap);
   if (within_tracker_reach(c.gap, c.sigmas * drift.translation, c.sigmas * drift.rotation)) {
     ++gap_stats_.tracked;  // an odometry this good: the tracker's own match reaches the place
     return;
   }
   history_.clear();
-  Relocalization r{.before = std::move(map_)};
-  // No window wider than the map: an unbounded drift (no odometry, too little seen) searches it all.
-  constexpr int kOccupied = 65;  // %, as the written map's (map_saver's)
-  const OccupancyMap before = r.before.level(0).to_occupancy_map();
-  const double widest = std::min(c.max_window, std::hypot(before.width, before.height) * before.resolution);
-  r.window = std::clamp(c.sigmas * drift.translation, std::min(c.min_window, widest), widest);
-  r.window_theta = std::clamp(c.sigmas * drift.rotation, c.min_window_theta, std::numbers::pi);
-  const PointCloud2 occupied = occupied_points(before, kOccupied);
-  r.coarse = make_match_map(occupied, coarse_search(c, r.window, r.window_theta));  // the table's levels fit the window
-  r.fine = make_match_map(occupied, c.fine);
-  r.first_scan = trajectory_.size();
-  relocalization_ = std::move(r);
+  SearchBeforeGap search(c, map_.level(0), drift);
+  relocalization_.emplace(Relocalization{.before = std::move(map_), .search = std::move(search), .first_scan = trajectory_.size()});
   restart_map();
 }
 
-// One attempt (every attempt_distance travelled since the gap): this scan searched for in the map
-// before the gap. A match that agrees with an earlier one of a scan at least confirm_min_distance
-// away relocalizes; after max_attempts Hector goes on in the new map.
+// One more scan after the gap searched for in the map before it (SearchBeforeGap); after
+// max_attempts, or max_mapped_scans in the new map, Hector goes on in the new map.
 void HectorSlam::relocalize(const LaserScan& corrected, const HectorInputs& inputs) {
-  const HectorRelocalizationConfig& c = config_.relocalization;
   Relocalization& r = *relocalization_;
-  if (trajectory_.size() >= 2 && trajectory_.size() - 1 > r.first_scan) {
-    r.path += (trajectory_.back().pose.translation() - trajectory_[trajectory_.size() - 2].pose.translation()).norm();
-  }
-  if (r.mapped.size() >= static_cast<std::size_t>(c.max_mapped_scans)) {
+  if (r.mapped.size() >= static_cast<std::size_t>(config_.relocalization.max_mapped_scans)) {
     abandon_relocalization();
     return;
   }
-  // Candidates too far back along the path to be confirmed go; while one waits, the next attempt
-  // comes after attempt_distance, else after a share of the path since the gap.
-  std::erase_if(r.candidates, [&](const auto& candidate) { return r.path - candidate.second > c.confirm_max_distance; });
-  const double spacing = r.candidates.empty() ? std::max(c.attempt_distance, c.attempt_spacing * r.path) : c.attempt_distance;
-  if (r.attempts > 0 && r.path - r.attempted_at < spacing) return;
-  r.attempted_at = r.path;
-  ++r.attempts;
-  ++gap_stats_.attempts;
-  const std::optional<SE2> found = search_before_gap(corrected, inputs);
-  const std::optional<SE2> T_before_new = found ? std::optional<SE2>(*found * last_pose_->inverse()) : std::nullopt;
-  if (T_before_new && !contradicted(*T_before_new)) {
-    const SE2 correction = last_pose_->between(*found);
-    if (within_tracker_reach(c.gap, correction.translation().norm(), std::abs(correction.theta()))) {
-      relocalize_at(*T_before_new);  // where the tracker's own match would have put it: no alias to fear
-      return;
-    }
-    for (const auto& [earlier, at] : r.candidates) {
-      const SE2 apart = (earlier * *last_pose_).between(*found);
-      if (r.path - at >= c.confirm_min_distance && apart.translation().norm() <= c.confirm_tolerance &&
-          std::abs(apart.theta()) <= c.confirm_rotation_tolerance) {
-        relocalize_at(*T_before_new);
-        return;
-      }
-    }
-    r.candidates.emplace_back(*T_before_new, r.path);
+  std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
+  if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
+  const int attempts = r.search.attempts();
+  const SearchBeforeGap::Verdict verdict = r.search.add(points, *last_pose_, [&] { return wall_points(map_.level(0)); });
+  gap_stats_.attempts += static_cast<std::size_t>(r.search.attempts() - attempts);
+  if (verdict.T_before_new) {
+    relocalize_at(*verdict.T_before_new);
+  } else if (verdict.give_up) {
+    abandon_relocalization();
   }
-  if (r.attempts >= c.max_attempts) abandon_relocalization();
-}
-
-// The scan's pose in the map before the gap, searched for around its pose in the new map (the
-// odometry's guess) over the window, coarse then fine; none unless the fine match passes the
-// thresholds.
-std::optional<SE2> HectorSlam::search_before_gap(const LaserScan& corrected, const HectorInputs& inputs) const {
-  const HectorRelocalizationConfig& c = config_.relocalization;
-  const Relocalization& r = *relocalization_;
-  PointCloud2 scan;
-  scan.points = usable_end_points(corrected, config_.min_range, config_.max_range);
-  if (inputs.attitude) scan.points = project_to_horizontal(scan.points, *inputs.attitude);
-  // The new map's own drift since the gap widens the window.
-  const double window = r.window + c.drift_per_metre * r.path;
-  const double window_theta = std::min(r.window_theta + c.drift_per_metre * r.path, std::numbers::pi);
-  const MatchResult found = match_correlative_map(r.coarse, scan, *last_pose_, coarse_search(c, window, window_theta));
-  if (!found.converged) return std::nullopt;
-  const MatchResult fine = match_correlative_map(r.fine, scan, found.T_target_source, c.fine);
-  if (!fine.converged || fine.degenerate || fine.score < c.min_score || fine.inlier_fraction < c.min_inlier_fraction) {
-    return std::nullopt;
-  }
-  return fine.T_target_source;
-}
-
-// Whether the map before the gap contradicts the new map moved by T_before_new: more than
-// max_contradiction of the new map's occupied cells that land where the old map saw anything land
-// on cells it saw free (none of its occupied cells within verify_distance). A corridor matched a
-// few doors along, a room matched in its twin: the scan fits, the walls beyond it do not.
-bool HectorSlam::contradicted(const SE2& T_before_new) const {
-  constexpr int kOccupied = 65;  // %, as the written map's
-  PointCloud2 walls = occupied_points(map_.level(0).to_occupancy_map(), kOccupied);
-  for (Point2& point : walls.points) point = T_before_new * point;
-  const Relocalization& r = *relocalization_;
-  return check_free_space(r.before.level(0), r.fine.grid.tree(), walls.points, config_.relocalization.verify_distance)
-      .contradicted(config_.relocalization.max_contradiction);
 }
 
 // The new map's scans go into the map before the gap at their poses moved by T_before_new, which

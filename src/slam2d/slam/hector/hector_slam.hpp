@@ -8,7 +8,8 @@
 // end points against the map pyramid coarse to fine (registration/occupancy_gradient_match.hpp),
 // and integrate the scan into every level when the pose moved more than a distance or angle
 // threshold since the last map update. No loop closure: the map is built once, scan by scan; after a
-// gap in the scans it searches that map for where it is (HectorRelocalizationConfig). Deterministic.
+// gap in the scans it searches that map for where it is (slam/relocalization/search_before_gap.hpp).
+// Deterministic.
 
 #include <array>
 #include <optional>
@@ -26,6 +27,7 @@
 #include "slam2d/core/scan_gaps.hpp"
 #include "slam2d/core/scan_preprocessing.hpp"
 #include "slam2d/registration/correlative_map_match.hpp"
+#include "slam2d/slam/relocalization/search_before_gap.hpp"
 
 namespace slam2d {
 
@@ -38,82 +40,6 @@ enum class MotionPrior {
 constexpr auto choices(MotionPrior) {
   return std::array{Choice{"odometry", MotionPrior::kOdometry}, Choice{"constant_velocity", MotionPrior::kConstantVelocity},
                     Choice{"last_pose", MotionPrior::kLastPose}};
-}
-
-// Across a gap in the scans (core/scan_gaps.hpp; not in the paper). Hector has one map and no loop
-// closure: a scan after a gap matched against the map from the odometry's prediction snaps onto
-// whatever place of the map is nearest, and Hector maps on from there (Intel with 198 s of scans
-// missing: 18.7 m on the relations across the gap, the odometry alone 13.9 m). So:
-// - the window is `sigmas` x the odometry's drift over the gap, measured on the scans before it
-//   against Hector's own poses (core/scan_gaps.hpp's odometry_drift_over; without odometry or
-//   history, the whole map and every heading). Within the tracker's reach (gap.track_*) the gap
-//   is tracked through on the old map, as before;
-// - else Hector starts a new map at the prediction and searches the old one for where it is: each
-//   scan (every attempt_distance travelled, later every attempt_spacing of the path since the gap)
-//   is matched against the old map's occupied cells, coarse then fine, over the window;
-// - a match must pass min_score and min_inlier_fraction, and the old map must not contradict the
-//   new one moved there (max_contradiction of its walls on the old map's free space: an alias a few
-//   doors along a corridor fits the scan, not the walls beyond it);
-// - a match within the tracker's reach of the pose, or two matches of scans confirm_min_distance
-//   to confirm_max_distance apart that put the new map at the same place, relocalize it: the new
-//   map's scans go into the old map there, the poses since the gap move with them, and Hector goes
-//   on in the old map;
-// - after max_attempts (or max_mapped_scans, or at the next gap) it goes on in the new map alone,
-//   the old one kept for the written map (HectorSlam::occupancy_map).
-// docs/methods/hector.md, "Across a gap in the scans".
-struct HectorRelocalizationConfig {
-  bool enabled = true;  // graph SLAM's tracker: ignored (graph SLAM restarts it; its loop closer searches)
-  ScanGapConfig gap{};
-  double sigmas = 3.0;
-  double min_window = 0.5;         // m
-  double max_window = 100.0;       // m; and never wider than the map
-  double min_window_theta = 0.1;   // rad
-  // The coarse search and the fine one around its pose (graph SLAM's global search's settings:
-  // registration/correlative_map_match.hpp's wide search).
-  MapMatchConfig coarse = wide_search_coarse();
-  MapMatchConfig fine = wide_search_fine();
-  double min_score = 0.6;
-  double min_inlier_fraction = 0.8;
-  double confirm_min_distance = 0.5;   // m travelled between the two scans ...
-  double confirm_max_distance = 5.0;   // ... at most
-  double confirm_tolerance = 0.25;     // m
-  double confirm_rotation_tolerance = 0.05;  // rad
-  double verify_distance = 0.2;        // m: a new map's wall this near an old one agrees ...
-  double max_contradiction = 0.15;     // ... and at most this share of them may land on free space
-  double attempt_distance = 0.2;       // m travelled between two attempts ...
-  double attempt_spacing = 0.25;       // ... at least this share of the path since the gap
-  double drift_per_metre = 0.02;       // m and rad the window widens per metre since the gap
-  int max_attempts = 100;
-  int max_mapped_scans = 2000;         // the new map's scans kept to go into the old one
-};
-
-template <typename Fields>
-void describe(Fields& f, HectorRelocalizationConfig& c) {
-  f.flag("enabled", c.enabled, "after a gap in the scans, search the map before it (graph SLAM's tracker: ignored)");
-  f.section("gap", c.gap, "what is a gap in the scans");
-  f.number("sigmas", c.sigmas, "1", greater_than(0), "the search window: this many times the odometry's drift over the gap ...");
-  f.number("min_window", c.min_window, "m", greater_than(0), "... at least this ...");
-  f.number("max_window", c.max_window, "m", greater_than(0), "... and at most this or the map's diagonal (also without a measured drift)");
-  f.number("min_window_theta", c.min_window_theta, "rad", greater_than(0), "the heading window at least this (at most pi)");
-  f.section("coarse", c.coarse, "the coarse search over the window");
-  f.section("fine", c.fine, "the fine search and refinement around the coarse pose");
-  f.number("min_score", c.min_score, "1", between(0, 1), "correlative response a match needs");
-  f.number("min_inlier_fraction", c.min_inlier_fraction, "1", between(0, 1), "after refinement, a match needs this");
-  f.number("confirm_min_distance", c.confirm_min_distance, "m", at_least(0),
-           "two agreeing matches of scans at least this far apart along the path relocalize ...");
-  f.number("confirm_max_distance", c.confirm_max_distance, "m", at_least(0), "... and at most this");
-  f.number("confirm_tolerance", c.confirm_tolerance, "m", greater_than(0), "two matches agree within this ...");
-  f.number("confirm_rotation_tolerance", c.confirm_rotation_tolerance, "rad", greater_than(0), "... and this");
-  f.number("verify_distance", c.verify_distance, "m", greater_than(0),
-           "a match is checked against the whole new map: its occupied cells this near an old one agree ...");
-  f.number("max_contradiction", c.max_contradiction, "1", between(0, 1),
-           "... and at most this share of those the old map saw may land on its free cells");
-  f.number("attempt_distance", c.attempt_distance, "m", at_least(0), "travelled between two attempts ...");
-  f.number("attempt_spacing", c.attempt_spacing, "1", at_least(0), "... and at least this share of the path since the gap");
-  f.number("drift_per_metre", c.drift_per_metre, "m (rad) per m", at_least(0),
-           "the window widens by this per metre travelled since the gap (the new map's drift)");
-  f.number("max_attempts", c.max_attempts, "1", at_least(1), "attempts per gap before Hector goes on in the new map alone ...");
-  f.number("max_mapped_scans", c.max_mapped_scans, "1", at_least(1), "... or scans in the new map (kept until then)");
 }
 
 struct HectorSlamConfig {
@@ -209,7 +135,10 @@ struct HectorSlamConfig {
   OdometryCalibrationConfig odometry_calibration{.window = 0.0};
   MatchNoiseConfig match_noise{.floor_translation = 0.0, .floor_rotation = 0.0};
   double fusion_gate = kMotionGateChi2;
-  HectorRelocalizationConfig relocalization{};
+  // After a gap in the scans a new map from the prediction, and the map before the gap searched
+  // for where it is (slam/relocalization/search_before_gap.hpp; docs/methods/hector.md, "Across a
+  // gap in the scans"). Graph SLAM's tracker ignores it: graph SLAM restarts it, its loop closer searches.
+  GapRelocalizationConfig relocalization{};
 };
 
 template <typename Fields>
@@ -272,14 +201,6 @@ struct HectorStep {
   OdometryCheck odometry;                        // the guard's verdict (kOdometry prior only)
 };
 
-/// Gaps in the scans and the searches after them (relocalization.enabled).
-struct HectorGapStats {
-  std::size_t gaps = 0;
-  std::size_t attempts = 0;     // scans matched against the map before a gap
-  std::size_t tracked = 0;      // gaps the odometry bridged well enough to track through (gap.track_*)
-  std::size_t relocalized = 0;  // gaps after which Hector found its place in the map before it
-  std::size_t abandoned = 0;    // ... and after which it went on in a new map (max_attempts, the next gap)
-};
 
 /// Throws Error for negative or non-finite ranges/thresholds, min_range >= max_range, or an invalid
 /// map or matcher configuration.
@@ -301,7 +222,7 @@ class HectorSlam {
   /// The map to write: the finest level, over the maps set aside at gaps after which Hector did not
   /// find its place (or is still searching for it), each in the odometry's frame across its gap.
   OccupancyMap occupancy_map() const;
-  const HectorGapStats& gap_stats() const { return gap_stats_; }
+  const GapStats& gap_stats() const { return gap_stats_; }
   /// One pose per scan added, in order, stamped with the scan's stamp.
   const Trajectory& trajectory() const { return trajectory_; }
   std::size_t map_updates() const { return map_updates_; }
@@ -336,8 +257,6 @@ class HectorSlam {
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
   void begin_relocalization(double gap);
   void relocalize(const LaserScan& corrected, const HectorInputs& inputs);
-  std::optional<SE2> search_before_gap(const LaserScan& corrected, const HectorInputs& inputs) const;
-  bool contradicted(const SE2& T_before_new) const;
   void relocalize_at(const SE2& T_before_new);
   void abandon_relocalization();
   void remember(double stamp, const HectorInputs& inputs);
@@ -365,23 +284,16 @@ class HectorSlam {
   double residual_variance_ = 0.0;                      // the last match's mean squared residual (0: none yet)
   // Across gaps in the scans (relocalization.enabled).
   struct Relocalization {  // after a gap, while the map before it is searched
-    MapPyramid before;     // the map before the gap
-    MatchMap coarse{};     // its occupied cells, for the coarse and the fine search
-    MatchMap fine{};
-    double window = 0.0;        // m
-    double window_theta = 0.0;  // rad
+    MapPyramid before;      // the map before the gap
+    SearchBeforeGap search;
     std::size_t first_scan = 0;  // the trajectory's index of the first scan after the gap
     std::vector<std::pair<LaserScan, SE2>> mapped{};  // the scans in the new map, at their poses there
-    std::vector<std::pair<SE2, double>> candidates{};  // T_before_new of each good match, at the path's length
-    double path = 0.0;            // m travelled since the gap
-    double attempted_at = 0.0;    // path at the last attempt
-    int attempts = 0;
   };
   ScanGapDetector gaps_;
   std::vector<OdometryAndEstimate> history_;  // since the last gap, with odometry: its drift's measure
   std::optional<Relocalization> relocalization_;
   std::vector<OccupancyMap> earlier_maps_;   // set aside at gaps not relocalized, the oldest first
-  HectorGapStats gap_stats_;
+  GapStats gap_stats_;
 };
 
 }  // namespace slam2d

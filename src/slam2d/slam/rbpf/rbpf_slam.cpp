@@ -17,6 +17,7 @@
 #include "slam2d/core/thread_sanitizer.hpp"
 #include "slam2d/core/resampling.hpp"
 #include "slam2d/optim/robust_kernel.hpp"
+#include "slam2d/registration/free_space_check.hpp"
 
 namespace slam2d {
 
@@ -63,6 +64,7 @@ void validate(const RbpfConfig& config) {
   validate(config.proposal);
   validate(config.motion);
   validate(config.scan_odometry_noise);
+  validate(config.relocalization);
 }
 
 RbpfPathNode::~RbpfPathNode() {
@@ -76,7 +78,8 @@ RbpfSlam::RbpfSlam(const RbpfConfig& config)
     : config_(config),
       odometry_guard_(config.odometry_guard),
       scan_odometry_noise_(config.scan_odometry_noise),
-      scan_odometry_calibration_(config.scan_odometry_calibration) {
+      scan_odometry_calibration_(config.scan_odometry_calibration),
+      gaps_(config.relocalization.gap) {
   validate(config_);
   const int threads = std::min(config_.threads == 0 ? tbb::info::default_concurrency() : config_.threads,
                                config_.particles);
@@ -213,25 +216,29 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
   if (odometry.fault == OdometryFault::kCatchUp) delta = last_corrected_odometry_.between(last_moved_corrected_ * odometry.increment);
   SE2 corrected = last_corrected_odometry_ * delta;
   if (config_.scan_matched_odometry) {
-    // The previous scan's pose in the best particle's map, the prediction, the match.
+    // The previous scan's pose in the best particle's map, the prediction, the match; after a gap,
+    // while the filter waits, in the new map (the same frame: the filter does not move meanwhile).
     const RbpfParticle& particle = best();
+    const MapPyramid& map = relocalization_ ? relocalization_->map : particle.map;
     const SE2 previous = particle.T_map_robot * update_odometry_.back().between(last_corrected_odometry_);
     const SE2 predicting = calibrating() && odometry.trusted() ? scan_odometry_calibration_.corrected(delta) : delta;
     const SE2 predicted = previous * predicting;
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
     RbpfProposalConfig matching = scan_odometry_matching(config_);
     if (!odometry.trusted()) matching.motion_prior_weight = 0.0;
-    const ProposalResult match =
-        improved_proposal(particle.map, points, predicted, scan_odometry_sigmas(predicting), matching, /*fit=*/false);
+    ProposalResult match;  // none in a new map still empty
+    if (!relocalization_ || !relocalization_->map_empty) {
+      match = improved_proposal(map, points, predicted, scan_odometry_sigmas(predicting), matching, /*fit=*/false);
+    }
     learn_odometry_noise(odometry, predicting, previous, match);
     std::optional<SE2> matched = match.matched ? std::optional(match.x_star) : std::nullopt;
-    if (odometry.fault == OdometryFault::kCatchUp) {
-      const ProposalResult second = improved_proposal(particle.map, points, previous, motion_sigmas(SE2(), config_.motion),
+    if (odometry.fault == OdometryFault::kCatchUp && (!relocalization_ || !relocalization_->map_empty)) {
+      const ProposalResult second = improved_proposal(map, points, previous, motion_sigmas(SE2(), config_.motion),
                                                       matching, /*fit=*/false);
       const SE2 alternative = second.matched ? second.x_star : previous;
       const double sigma = config_.proposal.likelihood_sigma;
-      const double cost = -log_observation_likelihood(particle.map.level(0), points, matched.value_or(predicted), sigma);
-      const double alternative_cost = -log_observation_likelihood(particle.map.level(0), points, alternative, sigma);
+      const double cost = -log_observation_likelihood(map.level(0), points, matched.value_or(predicted), sigma);
+      const double alternative_cost = -log_observation_likelihood(map.level(0), points, alternative, sigma);
       if (alternative_cost < kCompetingStartAdvantage * cost) matched = alternative;
     }
     if (matched) corrected = last_corrected_odometry_ * previous.between(*matched);
@@ -272,10 +279,18 @@ void RbpfSlam::learn_odometry_calibration(const OdometryCheck& odometry, const S
 }
 
 RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
-  RbpfStep step;
   const OdometryCheck odometry = odometry_guard_.check(scan.stamp, wheel_odometry);
-  if (scans_.empty()) last_corrected_odometry_ = last_moved_corrected_ = wheel_odometry;
-  const SE2 T_odom_robot = scans_.empty() ? wheel_odometry : corrected_odometry(scan, odometry);
+  const double gap = config_.relocalization.enabled ? gaps_.gap_before(scan.stamp) : 0.0;
+  if (gap > 0.0) begin_relocalization(gap);
+  if (scans_.empty() && !relocalization_) last_corrected_odometry_ = last_moved_corrected_ = wheel_odometry;
+  const SE2 T_odom_robot = scans_.empty() && !relocalization_ ? wheel_odometry : corrected_odometry(scan, odometry);
+  const RbpfStep step = relocalization_ ? map_after_gap(scan, T_odom_robot) : filter(scan, T_odom_robot);
+  if (!relocalization_) add_to_history(history_, {scan.stamp, wheel_odometry, step.T_map_robot});
+  return step;
+}
+
+RbpfStep RbpfSlam::filter(const LaserScan& scan, const SE2& T_odom_robot) {
+  RbpfStep step;
   if (scans_.empty()) {
     initialise(scan, T_odom_robot);
     update_odometry_.push_back(T_odom_robot);
@@ -300,6 +315,86 @@ RbpfStep RbpfSlam::add_scan(const LaserScan& scan, const SE2& wheel_odometry) {
   return step;
 }
 
+// A gap in the scans ended (the scan being added is the first after it): unless the odometry's
+// drift over the gap, measured before it, is within the per-scan matching's reach, the filter
+// waits, and the best particle's map is searched for the scans after the gap (SearchBeforeGap). A
+// gap while an earlier one is still searched for gives that search up.
+void RbpfSlam::begin_relocalization(double gap) {
+  ++gap_stats_.gaps;
+  if (relocalization_) end_relocalization(std::nullopt);
+  if (scans_.empty()) return;
+  const GapRelocalizationConfig& c = config_.relocalization;
+  const Drift drift = odometry_drift_over(history_, gap);
+  if (within_tracker_reach(c.gap, c.sigmas * drift.translation, c.sigmas * drift.rotation)) {
+    ++gap_stats_.tracked;
+    return;
+  }
+  history_.clear();
+  const RbpfParticle& particle = best();
+  relocalization_.emplace(Relocalization{.search = SearchBeforeGap(c, particle.map.level(0), drift),
+                                         .T_map_odom = particle.T_map_robot * update_odometry_.back().inverse(),
+                                         .map = MapPyramid(map_config(config_))});
+}
+
+// A scan after the gap, while the filter waits: into the new map (as an update would, after
+// update_distance or update_angle), kept, and searched for in the best particle's map.
+RbpfStep RbpfSlam::map_after_gap(const LaserScan& scan, const SE2& T_odom_robot) {
+  Relocalization& r = *relocalization_;
+  const SE2 pose = r.T_map_odom * T_odom_robot;  // in the new map
+  const SE2 moved = r.last_mapped.between(pose);
+  if (r.map_empty || moved.translation().norm() > config_.update_distance ||
+      std::abs(normalize_angle(moved.theta())) > config_.update_angle) {
+    r.map.integrate_scan(scan, pose);
+    r.map_empty = false;
+    r.last_mapped = pose;
+  }
+  r.scans.emplace_back(scan, T_odom_robot);
+  if (r.scans.size() >= static_cast<std::size_t>(config_.relocalization.max_mapped_scans)) {
+    return end_relocalization(std::nullopt);
+  }
+  const int attempts = r.search.attempts();
+  const SearchBeforeGap::Verdict verdict =
+      r.search.add(usable_end_points(scan, config_.min_range, config_.max_range), pose, [&] { return wall_points(r.map.level(0)); });
+  gap_stats_.attempts += static_cast<std::size_t>(r.search.attempts() - attempts);
+  if (verdict.T_before_new || verdict.give_up) return end_relocalization(verdict.T_before_new);
+  RbpfStep step;
+  step.T_map_robot = pose;
+  step.neff = last_neff_;
+  return step;
+}
+
+// The search ends: found (T_before_new, the new map's pose in the best particle's map), the scans
+// since the gap go to the filter moved with it, and each particle matches them in its own map;
+// given up, they go to it from the odometry's prediction, into empty maps (the best particle's
+// map set aside for the written one).
+RbpfStep RbpfSlam::end_relocalization(const std::optional<SE2>& T_before_new) {
+  Relocalization r = std::move(*relocalization_);
+  relocalization_.reset();
+  // T_before_new in the filter's odometry frame.
+  const SE2 moved = T_before_new ? r.T_map_odom.inverse() * *T_before_new * r.T_map_odom : SE2();
+  if (T_before_new) {
+    ++gap_stats_.relocalized;
+  } else {
+    ++gap_stats_.abandoned;
+    earlier_maps_.push_back(best().map.level(0).to_occupancy_map());
+    const MapPyramid empty(map_config(config_));
+    for (RbpfParticle& particle : particles_) particle.map = empty;
+  }
+  RbpfStep step;
+  for (const auto& [scan, T_odom_robot] : r.scans) step = filter(scan, moved * T_odom_robot);
+  last_corrected_odometry_ = moved * last_corrected_odometry_;
+  last_moved_corrected_ = moved * last_moved_corrected_;
+  return step;
+}
+
+OccupancyMap RbpfSlam::occupancy_map() const {
+  OccupancyMap map;
+  for (const OccupancyMap& earlier : earlier_maps_) map = overlay(map, earlier);
+  map = overlay(map, best().map.level(0).to_occupancy_map());
+  if (relocalization_) map = overlay(map, relocalization_->map.level(0).to_occupancy_map());
+  return map;
+}
+
 std::size_t RbpfSlam::best_index() const {
   std::size_t best = 0;
   for (std::size_t i = 1; i < particles_.size(); ++i) {
@@ -310,7 +405,6 @@ std::size_t RbpfSlam::best_index() const {
 
 Trajectory RbpfSlam::trajectory() const {
   Trajectory trajectory;
-  if (scans_.empty()) return trajectory;
   std::vector<SE2> update_pose(update_odometry_.size());
   for (const RbpfPathNode* node = best().path.get(); node != nullptr; node = node->parent.get()) {
     update_pose[node->update] = node->T_map_robot;
@@ -324,6 +418,11 @@ Trajectory RbpfSlam::trajectory() const {
                                                 update_odometry_[k].between(update_odometry_[k + 1]), since_update)
                          : update_pose[k] * since_update;
     trajectory.push_back(record.stamp, pose);
+  }
+  if (relocalization_) {  // the scans since a gap, while the filter waits: in the new map
+    for (const auto& [scan, T_odom_robot] : relocalization_->scans) {
+      trajectory.push_back(scan.stamp, relocalization_->T_map_odom * T_odom_robot);
+    }
   }
   return trajectory;
 }

@@ -27,11 +27,14 @@
 
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/motion_fusion.hpp"
+#include "slam2d/core/occupancy_map.hpp"
 #include "slam2d/core/odometry_guard.hpp"
+#include "slam2d/core/scan_gaps.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
 #include "slam2d/grid/map_pyramid.hpp"
 #include "slam2d/slam/rbpf/proposal.hpp"
+#include "slam2d/slam/relocalization/search_before_gap.hpp"
 
 namespace slam2d {
 
@@ -110,6 +113,15 @@ struct RbpfConfig {
   // trusted (a stall, a jump) is replaced by no motion, a catch-up is applied from the scan where
   // the odometry last moved, and the per-scan matching finds the motion without the prior.
   OdometryGuardConfig odometry_guard{};
+  // After a gap in the scans (not in the paper; Hector's, slam/relocalization/search_before_gap.hpp):
+  // the filter waits while the scans after the gap are mapped from the odometry's prediction in a
+  // new map of their own and the best particle's map is searched for where that map lies; once
+  // found, the scans go to the filter from there (each particle matches them in its own map), and
+  // after max_attempts from the prediction into empty maps, the old one kept for the written map.
+  // A gap whose odometry drift is within the per-scan matching's reach (gap.track_*) is crossed as
+  // any long step (docs/methods/rbpf.md, "Across a gap in the scans"). `slam2d map` turns it off
+  // where the motion input is Hector's poses (the 2015 chain): Hector's search placed them already.
+  GapRelocalizationConfig relocalization{};
 };
 
 template <typename Fields>
@@ -146,6 +158,7 @@ void describe(Fields& f, RbpfConfig& c) {
   f.number("scan_odometry_rotation_margin", c.scan_odometry_rotation_margin, "1", closed_open(0, 1),
            "relative cost drop a turned start needs to win");
   f.section("odometry_guard", c.odometry_guard, "the check of each wheel-odometry increment");
+  f.section("relocalization", c.relocalization, "after a gap in the scans, the search of the best particle's map before it");
 }
 
 /// Throws Error for settings outside the documented ranges.
@@ -211,6 +224,10 @@ class RbpfSlam {
   Trajectory trajectory() const;
   /// The best particle's finest map level.
   const OccupancyGrid& map() const { return best().map.level(0); }
+  /// The map to write: the best particle's finest level over the maps set aside at gaps after which
+  /// the filter did not find its place, and beneath the map since a gap while it still searches.
+  OccupancyMap occupancy_map() const;
+  const GapStats& gap_stats() const { return gap_stats_; }
   const std::vector<RbpfParticle>& particles() const { return particles_; }
   const RbpfStats& stats() const { return stats_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
@@ -228,6 +245,11 @@ class RbpfSlam {
   /// update_particle for every particle, on config_.threads threads.
   void update_particles(const LaserScan& scan, const std::vector<Eigen::Vector2d>& points, const SE2& u);
   bool resample_if_needed();
+  /// The filter's step for one scan at its scan-matched odometry pose: an update when due.
+  RbpfStep filter(const LaserScan& scan, const SE2& T_odom_robot);
+  void begin_relocalization(double gap);
+  RbpfStep map_after_gap(const LaserScan& scan, const SE2& T_odom_robot);
+  RbpfStep end_relocalization(const std::optional<SE2>& T_before_new);
 
   struct ScanRecord {
     double stamp = 0.0;
@@ -260,6 +282,20 @@ class RbpfSlam {
   double last_update_stamp_ = 0.0;
   double last_neff_ = 0.0;
   RbpfStats stats_;
+  // Across gaps in the scans (config.relocalization).
+  struct Relocalization {  // after a gap, while the best particle's map is searched
+    SearchBeforeGap search;
+    SE2 T_map_odom;           // the filter's odometry frame in the best particle's map at the gap
+    MapPyramid map;           // the new map, from the odometry's prediction
+    bool map_empty = true;
+    SE2 last_mapped{};        // the new map's pose of the last scan that went into it
+    std::vector<std::pair<LaserScan, SE2>> scans{};  // since the gap, at their scan-matched odometry poses
+  };
+  ScanGapDetector gaps_;
+  std::vector<OdometryAndEstimate> history_;  // since the last gap: the odometry's drift's measure
+  std::optional<Relocalization> relocalization_;
+  std::vector<OccupancyMap> earlier_maps_;    // set aside at gaps not relocalized, the oldest first
+  GapStats gap_stats_;
 };
 
 }  // namespace slam2d
