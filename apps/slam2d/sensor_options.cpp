@@ -122,27 +122,24 @@ void add_odometry_time_offset_option(CLI::App* command, std::string& spec) {
       ->capture_default_str();
 }
 
-// The log's messages as the time-offset estimate needs them, read twice: first every message with
-// the laser scans' ranges and intensities dropped as they come (stamps and odometry poses are all
-// the estimate reads of most scans), then again for the ranges of the scans it matches
+// The log as the time-offset estimate needs it, read twice: first every message's stamp and
+// odometry pose (all the estimate reads of most scans), then again for the scans it matches
 // (odometry_time_offset_scans: at most 6,000 of them). Holding a whole long log instead (an hour
-// of a 1080-beam scanner at 40 Hz is over a gigabyte) would be the run's peak memory.
+// of a 1080-beam scanner at 40 Hz is over a gigabyte; ten passes of Intel as messages, 130 MB)
+// would be the run's peak memory.
 namespace {
 
-std::vector<SensorMessage> read_for_time_offset(const std::string& log, const LogReaderOptions& options, Progress& progress) {
-  std::vector<SensorMessage> messages;
+TimeOffsetInput read_for_time_offset(const std::string& log, const LogReaderOptions& options, Progress& progress) {
+  TimeOffsetInput input;
+  std::size_t count = 0;
   {
     LogReader reader(log, options);
     while (auto message = reader.next()) {
-      if (auto* laser = std::get_if<LaserMessage>(&*message)) {
-        std::vector<double>().swap(laser->scan.ranges);  // freed, not only emptied
-        std::vector<double>().swap(laser->scan.intensities);
-      }
-      messages.push_back(std::move(*message));
-      if (messages.size() % 4096 == 0) progress.update(0.5 * reader.progress(), fmt::format("{} messages read", messages.size()));
+      input.add(*message, /*with_scan=*/false);
+      if (++count % 4096 == 0) progress.update(0.5 * reader.progress(), fmt::format("{} messages read", count));
     }
   }
-  const std::vector<std::size_t> used = odometry_time_offset_scans(messages);
+  const std::vector<std::size_t> used = odometry_time_offset_scans(input);
   LogReader reader(log, options);
   std::size_t index = 0;
   for (const std::size_t wanted : used) {
@@ -153,21 +150,24 @@ std::vector<SensorMessage> read_for_time_offset(const std::string& log, const Lo
       ++index;
     }
     auto* laser = std::get_if<LaserMessage>(&*message);
-    auto* kept = std::get_if<LaserMessage>(&messages[wanted]);
-    check(laser != nullptr && kept != nullptr && laser->scan.stamp == kept->scan.stamp,
+    check(laser != nullptr && input.set_scan(wanted, std::move(laser->scan)),
           log + ": the log changed while it was read for the odometry time offset");
-    kept->scan = std::move(laser->scan);
     if (index % 256 == 0) progress.update(0.5 + 0.5 * reader.progress(), fmt::format("{} scans read again", used.size()));
   }
-  return messages;
+  return input;
+}
+
+// --odometry-time-offset auto: the estimate, applied when significant.
+OdometryTimeOffsetChoice auto_choice(const OdometryTimeOffset& estimate) {
+  OdometryTimeOffsetChoice choice{.mode = "auto", .estimate = estimate};
+  if (estimate.significant) choice.applied = estimate.offset;
+  return choice;
 }
 
 }  // namespace
 
 OdometryTimeOffsetChoice estimate_odometry_time_offset_choice(const std::vector<SensorMessage>& messages) {
-  OdometryTimeOffsetChoice choice{.mode = "auto", .estimate = estimate_odometry_time_offset(messages)};
-  if (choice.estimate->significant) choice.applied = choice.estimate->offset;
-  return choice;
+  return auto_choice(estimate_odometry_time_offset(messages));
 }
 
 OdometryTimeOffsetChoice resolve_odometry_time_offset(const std::string& log, const std::string& spec,
@@ -177,7 +177,7 @@ OdometryTimeOffsetChoice resolve_odometry_time_offset(const std::string& log, co
     LogReaderOptions as_logged = options;
     as_logged.odometry_time_offset = 0.0;
     Progress progress("odometry time offset", quiet);
-    choice = estimate_odometry_time_offset_choice(read_for_time_offset(log, as_logged, progress));
+    choice = auto_choice(estimate_odometry_time_offset(read_for_time_offset(log, as_logged, progress)));
     progress.finish();
   } else if (spec != "off") {
     choice.mode = "given";

@@ -102,6 +102,24 @@ TEST(OdometryTimeOffset, TheScansItNamesAreAllItReads) {
   EXPECT_EQ(light.pairs, full.pairs);
   std::get<LaserMessage>(stripped[used[used.size() / 2]]).scan.ranges.clear();
   EXPECT_LT(estimate_odometry_time_offset(stripped, config).pairs, full.pairs);
+  // Read as slam2d map reads a long log: every message's stamp and pose, then the named scans.
+  TimeOffsetInput streamed;
+  for (const SensorMessage& message : messages) streamed.add(message, /*with_scan=*/false);
+  EXPECT_EQ(odometry_time_offset_scans(streamed, config), used);
+  for (const std::size_t index : used) ASSERT_TRUE(streamed.set_scan(index, std::get<LaserMessage>(messages[index]).scan));
+  const OdometryTimeOffset read_twice = estimate_odometry_time_offset(streamed, config);
+  EXPECT_EQ(read_twice.offset, full.offset);
+  EXPECT_EQ(read_twice.uncertainty, full.uncertainty);
+  EXPECT_EQ(read_twice.pairs, full.pairs);
+  const auto not_a_scan = std::find_if(messages.begin(), messages.end(), [](const SensorMessage& message) {
+    return !std::holds_alternative<LaserMessage>(message);
+  });
+  ASSERT_NE(not_a_scan, messages.end());
+  EXPECT_FALSE(streamed.set_scan(static_cast<std::size_t>(not_a_scan - messages.begin()), LaserScan{}));
+  EXPECT_FALSE(streamed.set_scan(messages.size(), LaserScan{}));
+  LaserScan another = std::get<LaserMessage>(messages[used.front()]).scan;
+  another.stamp += 1.0;  // the log changed between the two readings
+  EXPECT_FALSE(streamed.set_scan(used.front(), another));
 }
 
 TEST(OdometryTimeOffset, AStraightDriveWithoutTurnsIsNotEstimated) {
@@ -120,7 +138,8 @@ TEST(OdometryTimeOffset, AStraightDriveWithoutTurnsIsNotEstimated) {
 }
 
 TEST(OdometryTimeOffset, LogsItCannotJudgeAreNotEstimatedAndNothingThrows) {
-  EXPECT_FALSE(estimate_odometry_time_offset({}).estimated);
+  EXPECT_FALSE(estimate_odometry_time_offset(std::vector<SensorMessage>{}).estimated);
+  EXPECT_FALSE(estimate_odometry_time_offset(TimeOffsetInput{}).estimated);
   std::vector<SensorMessage> messages = office_log(0.0, 3.0);  // 30 scans: too few windows
   EXPECT_FALSE(estimate_odometry_time_offset(messages).estimated);
   messages = office_log(0.0, 60.0);

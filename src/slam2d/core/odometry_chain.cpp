@@ -6,14 +6,10 @@
 
 namespace slam2d {
 
-namespace {
-
 bool in_laser_chain(const SensorMessage& message) {
   if (const auto* laser = std::get_if<LaserMessage>(&message)) return laser->has_poses;
   return std::holds_alternative<TruePoseMessage>(message);
 }
-
-}  // namespace
 
 OdometryChain::OdometryChain(std::vector<ChainSample> samples) : samples_(std::move(samples)) {
   for (std::size_t k = samples_.size(); k-- > 1;) samples_[k - 1].stamp = std::min(samples_[k - 1].stamp, samples_[k].stamp);

@@ -56,6 +56,9 @@ class OdometryChain {
   std::vector<ChainSample> samples_;
 };
 
+/// Whether a message belongs to the laser chain: a laser line with poses, or TRUEPOS.
+bool in_laser_chain(const SensorMessage& message);
+
 /// The laser chain of `messages` (laser lines with poses and TRUEPOS, in file order).
 OdometryChain laser_odometry_chain(const std::vector<SensorMessage>& messages);
 

@@ -29,19 +29,6 @@ struct HeadingPair {
   std::size_t group = 0;   // jackknife group (of its window)
 };
 
-// The scans used: chain entries of the first laser type that carries odometry.
-std::vector<std::size_t> scan_entries(const std::vector<SensorMessage>& messages, const OdometryChain& chain) {
-  std::vector<std::size_t> scans;
-  const std::string* type = nullptr;
-  for (std::size_t k = 0; k < chain.size(); ++k) {
-    const auto* laser = std::get_if<LaserMessage>(&messages[chain[k].message]);
-    if (laser == nullptr) continue;
-    if (type == nullptr) type = &laser->type;
-    if (laser->type == *type) scans.push_back(k);
-  }
-  return scans;
-}
-
 // Step 1: the scan stride s giving pairs about pair_span apart (by the median scan period).
 std::size_t pair_stride(const OdometryChain& chain, const std::vector<std::size_t>& scans, double pair_span) {
   std::vector<double> periods;
@@ -115,23 +102,21 @@ struct Windows {
   std::vector<std::size_t> starts;  // into `scans`
 };
 
-Windows plan_windows(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
+Windows plan_windows(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config) {
   Windows windows;
-  windows.chain = laser_odometry_chain(messages);
-  windows.scans = scan_entries(messages, windows.chain);
+  windows.chain = input.chain();
+  windows.scans = input.scans();
   windows.stride = pair_stride(windows.chain, windows.scans, config.pair_span);
   windows.starts = window_starts(windows.scans.size(), windows.stride, config);
   return windows;
 }
 
 // Step 2: the heading pairs of one window, matched along it with a constant-velocity guess.
-void match_window(const std::vector<SensorMessage>& messages, const Windows& windows, std::size_t start,
+void match_window(const TimeOffsetInput& input, const Windows& windows, std::size_t start,
                   std::size_t group, const OdometryTimeOffsetConfig& config, std::vector<HeadingPair>& pairs) {
   const OdometryChain& chain = windows.chain;
   const std::vector<std::size_t>& scans = windows.scans;
-  const auto scan_at = [&](std::size_t i) -> const LaserScan& {
-    return std::get<LaserMessage>(messages[chain[scans[i]].message]).scan;
-  };
+  const auto scan_at = [&](std::size_t i) -> const LaserScan& { return input.scan(scans[i]); };
   std::optional<SE2> velocity;  // the last accepted motion per second, in the sensor frame
   PointCloud2 target = usable_cloud(scan_at(start), config);
   for (const auto& [a, b] : window_pairs(start, windows.stride, scans.size(), config)) {
@@ -226,10 +211,10 @@ double cost_at(const CostCurves& curves, const std::vector<double>& cost, double
   return cost[static_cast<std::size_t>(nearest - curves.offsets.begin())];
 }
 
-OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const OdometryTimeOffsetConfig& config) {
+OdometryTimeOffset estimate(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config) {
   OdometryTimeOffset result;
   // Step 1: windows of pairs spread over the log, dealt into the jackknife groups.
-  const Windows windows = plan_windows(messages, config);
+  const Windows windows = plan_windows(input, config);
   const OdometryChain& chain = windows.chain;
   const std::vector<std::size_t>& scans = windows.scans;
   const std::vector<std::size_t>& starts = windows.starts;
@@ -240,7 +225,7 @@ OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const Od
   }
   // Step 2: the heading change of each pair from the scans alone.
   std::vector<HeadingPair> pairs;
-  for (std::size_t w = 0; w < starts.size(); ++w) match_window(messages, windows, starts[w], w % groups, config, pairs);
+  for (std::size_t w = 0; w < starts.size(); ++w) match_window(input, windows, starts[w], w % groups, config, pairs);
   result.pairs = pairs.size();
   if (result.pairs < config.min_turning_pairs) {
     result.reason = "too few scan pairs matched: " + std::to_string(result.pairs) + " (scans more than " +
@@ -280,12 +265,54 @@ OdometryTimeOffset estimate(const std::vector<SensorMessage>& messages, const Od
   return result;
 }
 
+// The whole log held: every scan kept.
+TimeOffsetInput input_of(const std::vector<SensorMessage>& messages) {
+  TimeOffsetInput input;
+  for (const SensorMessage& message : messages) input.add(message, /*with_scan=*/true);
+  return input;
+}
+
 }  // namespace
 
-std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
-                                                    const OdometryTimeOffsetConfig& config) {
+void TimeOffsetInput::add(const SensorMessage& message, bool with_scan) {
+  const std::size_t index = messages_++;
+  if (!in_laser_chain(message)) return;
+  const std::size_t entry = samples_.size();
+  samples_.push_back({index, stamp_of(message), odometry_pose(message)});
+  const auto* laser = std::get_if<LaserMessage>(&message);
+  if (laser == nullptr) return;
+  if (!type_) type_ = laser->type;
+  if (laser->type != *type_) return;
+  scans_.push_back(entry);
+  if (with_scan) kept_.emplace_back(entry, laser->scan);
+}
+
+bool TimeOffsetInput::set_scan(std::size_t index, LaserScan scan) {
+  const auto sample = std::lower_bound(samples_.begin(), samples_.end(), index,
+                                       [](const ChainSample& s, std::size_t i) { return s.message < i; });
+  const auto entry = static_cast<std::size_t>(sample - samples_.begin());
+  if (sample == samples_.end() || sample->message != index || sample->stamp != scan.stamp ||
+      !std::binary_search(scans_.begin(), scans_.end(), entry)) {
+    return false;
+  }
+  const auto at = std::lower_bound(kept_.begin(), kept_.end(), entry, [](const auto& kept, std::size_t e) { return kept.first < e; });
+  if (at != kept_.end() && at->first == entry) {
+    at->second = std::move(scan);
+  } else {
+    kept_.emplace(at, entry, std::move(scan));
+  }
+  return true;
+}
+
+const LaserScan& TimeOffsetInput::scan(std::size_t k) const {
+  static const LaserScan kNone{};
+  const auto at = std::lower_bound(kept_.begin(), kept_.end(), k, [](const auto& kept, std::size_t e) { return kept.first < e; });
+  return at != kept_.end() && at->first == k ? at->second : kNone;
+}
+
+std::vector<std::size_t> odometry_time_offset_scans(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config) {
   validate(config);
-  const Windows windows = plan_windows(messages, config);
+  const Windows windows = plan_windows(input, config);
   std::vector<std::size_t> used;
   for (const std::size_t start : windows.starts) {
     for (const auto& [a, b] : window_pairs(start, windows.stride, windows.scans.size(), config)) {
@@ -298,13 +325,24 @@ std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMess
   return used;
 }
 
-OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
-                                                 const OdometryTimeOffsetConfig& config) {
+std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
+                                                    const OdometryTimeOffsetConfig& config) {
+  TimeOffsetInput input;
+  for (const SensorMessage& message : messages) input.add(message, /*with_scan=*/false);
+  return odometry_time_offset_scans(input, config);
+}
+
+OdometryTimeOffset estimate_odometry_time_offset(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config) {
   validate(config);
   const auto start = std::chrono::steady_clock::now();
-  OdometryTimeOffset result = estimate(messages, config);
+  OdometryTimeOffset result = estimate(input, config);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
+                                                 const OdometryTimeOffsetConfig& config) {
+  return estimate_odometry_time_offset(input_of(messages), config);
 }
 
 }  // namespace slam2d

@@ -40,10 +40,13 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "slam2d/core/config_fields.hpp"
+#include "slam2d/core/odometry_chain.hpp"
 #include "slam2d/core/sensor_log.hpp"
 
 namespace slam2d {
@@ -105,16 +108,44 @@ struct OdometryTimeOffset {
   std::string reason;             // why not estimated; empty when estimated
 };
 
-/// Estimates the odometry's time offset from a log's messages (file order) as above: the laser
-/// is the first laser type with odometry poses (FLASER, not RLASER, in a CARMEN log with both).
-/// Never throws on odd data: a log it cannot judge is "not estimated", with the reason.
+/// What the estimate reads of a log: its laser chain (stamps and odometry poses), which of the
+/// chain's entries are scans of the laser it pairs (the first laser type with odometry poses:
+/// FLASER, not RLASER, in a CARMEN log with both), and the scans themselves of those it matches.
+/// Built message by message in file order, so that a long log is never held: slam2d map's
+/// `--odometry-time-offset auto` reads it twice, first for add(), then for set_scan() of the
+/// messages odometry_time_offset_scans() names (an hour of a 1080-beam scanner at 40 Hz is over a
+/// gigabyte of ranges; ten passes of Intel held as messages, 130 MB).
+class TimeOffsetInput {
+ public:
+  /// The next message of the log; `with_scan`: keep its scan too (else only its stamp and pose).
+  void add(const SensorMessage& message, bool with_scan);
+  /// The scan of message `index` (file order), one of odometry_time_offset_scans(); false (and
+  /// nothing kept) unless that message was a scan the estimate pairs, with the same stamp.
+  [[nodiscard]] bool set_scan(std::size_t index, LaserScan scan);
+  /// The chain of the messages added so far.
+  OdometryChain chain() const { return OdometryChain(samples_); }
+  const std::vector<std::size_t>& scans() const { return scans_; }  // chain entries
+  /// The scan of chain entry k; an empty scan when it was not kept.
+  const LaserScan& scan(std::size_t k) const;
+
+ private:
+  std::vector<ChainSample> samples_;
+  std::vector<std::size_t> scans_;
+  std::optional<std::string> type_;                       // the laser paired
+  std::vector<std::pair<std::size_t, LaserScan>> kept_;   // by chain entry, ascending
+  std::size_t messages_ = 0;
+};
+
+/// Estimates the odometry's time offset from a log as above. Never throws on odd data: a log it
+/// cannot judge is "not estimated", with the reason.
+OdometryTimeOffset estimate_odometry_time_offset(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config = {});
+/// The same from a log's messages (file order), held whole.
 OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
                                                  const OdometryTimeOffsetConfig& config = {});
 
-/// The messages (indices, ascending) whose scans the estimate above matches: of every other laser
-/// message it reads the stamp and odometry pose alone, so a caller reading a long log may keep only
-/// these scans' ranges (slam2d map's `--odometry-time-offset auto` reads a log twice so, instead of
-/// holding all of it).
+/// The messages (indices, ascending) whose scans the estimate matches: of every other laser
+/// message it reads the stamp and odometry pose alone.
+std::vector<std::size_t> odometry_time_offset_scans(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config = {});
 std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
                                                     const OdometryTimeOffsetConfig& config = {});
 
