@@ -196,6 +196,46 @@ TEST(OdometrySmoothing, AThirdStreamTellsTheMethodsSlowErrorFromTheOdometrysDrif
   }
 }
 
+// The smoother keeps every checkpoint_interval-th filtered state and filters each stretch again on
+// its way back: any interval gives the poses of the plain smoother that keeps every state (1), to
+// the bit, across stretch boundaries, a jump cut from the chain and the slow error's states.
+TEST(OdometrySmoothing, CheckpointsGiveThePlainSmoothersPoses) {
+  Rng rng(17);
+  const std::vector<SE2> truth = drive();
+  const std::vector<SE2> method = slowly_wrong(truth, 0.03, 30.0, rng);
+  const std::vector<SE2> odometry = odometry_of(truth, 0.01, 0.01, rng);
+  std::vector<SE2> jumping = odometry;
+  for (std::size_t i = 1100; i < jumping.size(); ++i) jumping[i] = SE2(1.0, 0.0, 0.3) * jumping[i];  // a 1 m jump
+  const std::vector<SE2> scan = odometry_of(truth, 0.03, 0.03, rng);
+  // The slow error's states (three streams), and a jump cut from the chain (two).
+  for (const bool third : {true, false}) {
+    const std::vector<SE2>& odo = third ? odometry : jumping;
+    const std::vector<SE2>* stream = third ? &scan : nullptr;
+    OdometrySmoothingConfig plain;
+    plain.checkpoint_interval = 1;
+    OdometrySmoothingStats plain_stats;
+    const std::vector<SE2> expected = smooth_with_odometry(method, odo, plain, &plain_stats, stream);
+    ASSERT_TRUE(plain_stats.applied);
+    ASSERT_NE(expected, method);
+    if (third) {
+      ASSERT_GT(plain_stats.noise.method_slow.x(), 0.0);
+    } else {
+      ASSERT_GE(plain_stats.steps_refused, 1u);
+    }
+    for (const std::size_t interval : {std::size_t{7}, std::size_t{1024}, truth.size() - 1, truth.size(), std::size_t{100000}}) {
+      OdometrySmoothingConfig config;
+      config.checkpoint_interval = interval;
+      OdometrySmoothingStats stats;
+      const std::vector<SE2> poses = smooth_with_odometry(method, odo, config, &stats, stream);
+      EXPECT_EQ(stats.poses_downweighted, plain_stats.poses_downweighted) << interval;
+      ASSERT_EQ(poses.size(), expected.size());
+      for (std::size_t i = 0; i < poses.size(); ++i) {
+        ASSERT_EQ(poses[i].vector(), expected[i].vector()) << "interval " << interval << ", pose " << i << ", third " << third;
+      }
+    }
+  }
+}
+
 // Where the method's error is white, the third stream finds no slow error worth the name and
 // changes little.
 TEST(OdometrySmoothing, AThirdStreamLeavesAWhiteMethodError) {

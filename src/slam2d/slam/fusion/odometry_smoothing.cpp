@@ -7,7 +7,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <span>
 
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
@@ -142,47 +141,71 @@ void estimate_jitter(const std::vector<SE2>& method, const std::vector<SE2>& odo
   noise.odometry_jitter = w.cwiseMax(0.0).cwiseSqrt();
 }
 
-// Samples y against the summed model variance x of the drift fit y = s x + b x^2.
-struct GrowthSamples {
-  std::vector<double> x;
-  std::vector<double> y;
-};
+// The drift fit y = s x + b x^2 (header, 2): samples y against the summed model variance x.
+// The scale s with s, b >= 0 (least squares, the better of the constrained fits where the free one
+// leaves the orthant), in three rounds, each trimming the samples beyond 16 times the last fit (a
+// match gone wrong, an odometry jump). A round takes its samples one by one (add) and is then
+// solved: the caller draws the samples anew for each round instead of holding them (eight lags of
+// every scan: 70 MB on Intel played ten times).
+class GrowthFit {
+ public:
+  static constexpr int kRounds = 3;
 
-// The scale s of y = s x + b x^2 with s, b >= 0 (least squares, the better of the constrained
-// fits where the free one leaves the orthant), three times, trimming samples beyond 16 times the
-// fit (a match gone wrong, an odometry jump).
-double fit_growth_scale(const GrowthSamples& samples) {
-  double s = 0.0, b = 0.0;
-  bool fitted = false;
-  for (int round = 0; round < 3; ++round) {
-    double x2 = 0, x3 = 0, x4 = 0, yx = 0, yx2 = 0, y2 = 0;
-    for (std::size_t k = 0; k < samples.x.size(); ++k) {
-      const double x = samples.x[k];
-      const double y = samples.y[k];
-      if (fitted && y > 16.0 * (s * x + b * x * x) + 1e-6) continue;
-      x2 += x * x, x3 += x * x * x, x4 += x * x * x * x, yx += y * x, yx2 += y * x * x, y2 += y * y;
+  void add(double x, double y) {
+    if (done_ || (fitted_ && y > 16.0 * (s_ * x + b_ * x * x) + 1e-6)) return;
+    x2_ += x * x, x3_ += x * x * x, x4_ += x * x * x * x, yx_ += y * x, yx2_ += y * x * x, y2_ += y * y;
+  }
+
+  // Ends the round: the fit of its samples (none: the last fit stays, and the rounds end).
+  void solve() {
+    if (done_) return;
+    if (!(x2_ > 0.0)) {
+      done_ = true;
+      return;
     }
-    if (!(x2 > 0.0)) break;
     const auto sse = [&](double ss, double bb) {
-      return y2 - 2 * ss * yx - 2 * bb * yx2 + ss * ss * x2 + 2 * ss * bb * x3 + bb * bb * x4;
+      return y2_ - 2 * ss * yx_ - 2 * bb * yx2_ + ss * ss * x2_ + 2 * ss * bb * x3_ + bb * bb * x4_;
     };
-    const double det = x2 * x4 - x3 * x3;
-    double free_s = det > 0.0 ? (yx * x4 - yx2 * x3) / det : -1.0;
-    double free_b = det > 0.0 ? (x2 * yx2 - x3 * yx) / det : -1.0;
+    const double det = x2_ * x4_ - x3_ * x3_;
+    const double free_s = det > 0.0 ? (yx_ * x4_ - yx2_ * x3_) / det : -1.0;
+    const double free_b = det > 0.0 ? (x2_ * yx2_ - x3_ * yx_) / det : -1.0;
     if (free_s >= 0.0 && free_b >= 0.0) {
-      s = free_s, b = free_b;
+      s_ = free_s, b_ = free_b;
     } else {
-      const double only_s = std::max(yx / x2, 0.0);
-      const double only_b = x4 > 0.0 ? std::max(yx2 / x4, 0.0) : 0.0;
+      const double only_s = std::max(yx_ / x2_, 0.0);
+      const double only_b = x4_ > 0.0 ? std::max(yx2_ / x4_, 0.0) : 0.0;
       if (sse(only_s, 0.0) <= sse(0.0, only_b)) {
-        s = only_s, b = 0.0;
+        s_ = only_s, b_ = 0.0;
       } else {
-        s = 0.0, b = only_b;
+        s_ = 0.0, b_ = only_b;
       }
     }
-    fitted = true;
+    fitted_ = true;
+    x2_ = x3_ = x4_ = yx_ = yx2_ = y2_ = 0.0;
   }
-  return s;
+
+  double scale() const { return s_; }
+
+ private:
+  double s_ = 0.0, b_ = 0.0;
+  bool fitted_ = false, done_ = false;
+  double x2_ = 0.0, x3_ = 0.0, x4_ = 0.0, yx_ = 0.0, yx2_ = 0.0, y2_ = 0.0;
+};
+
+// The drift's scales (translation, rotation) from the samples `for_each_sample(visit)` draws,
+// visit(translation x, translation y, rotation x, rotation y), once per round.
+template <typename ForEachSample>
+std::pair<double, double> fit_growth_scales(const ForEachSample& for_each_sample) {
+  GrowthFit translation, rotation;
+  for (int round = 0; round < GrowthFit::kRounds; ++round) {
+    for_each_sample([&](double tx, double ty, double rx, double ry) {
+      translation.add(tx, ty);
+      rotation.add(rx, ry);
+    });
+    translation.solve();
+    rotation.solve();
+  }
+  return {translation.scale(), rotation.scale()};
 }
 
 Eigen::Matrix3d rotation3(double theta) {
@@ -215,11 +238,12 @@ constexpr double kCutVariance = 1e6;
 // error in the map frame: Q[i] the odometry increment i-1 -> i's covariance in the robot frame,
 // cut[i] the increments refused (the pose is then predicted as unknown, b carries on), jitter R's
 // diagonal in the robot frame. The method's pose measures x + b. A method pose beyond the gate of
-// its innovation keeps gate / m^2 of its information (counted in downweighted).
+// its innovation keeps gate / m^2 of its information (counted in downweighted). The filtered state
+// of every `segment`-th scan is kept (OdometrySmoothingConfig::checkpoint_interval).
 std::vector<Eigen::Vector3d> rts_smoother(const std::vector<SE2>& method, const std::vector<SE2>& odometry,
                                           const std::vector<Eigen::Vector3d>& Q, const std::vector<bool>& cut,
                                           const Eigen::Vector3d& jitter, const SlowError& slow, double gate,
-                                          std::size_t& downweighted) {
+                                          std::size_t segment, std::size_t& downweighted) {
   const Eigen::Matrix3d R_robot = jitter.asDiagonal();
   const auto R_map = [&](const SE2& pose) {
     const Eigen::Matrix3d g = rotation3(pose.theta());
@@ -232,8 +256,7 @@ std::vector<Eigen::Vector3d> rts_smoother(const std::vector<SE2>& method, const 
   Eigen::Matrix<double, 3, 6> H;
   H << Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity();
   // The prediction of state i from state i-1 (its mean and covariance), with the transition's
-  // Jacobian: computed again in the backward pass instead of kept, so that the smoother holds
-  // only the filtered states (a long run's memory: ten passes of Intel, 136,000 scans).
+  // Jacobian: computed again in the backward pass instead of kept (the smoother's memory: below).
   struct Prediction {
     Vector6 mean;
     Matrix6 covariance;
@@ -263,41 +286,68 @@ std::vector<Eigen::Vector3d> rts_smoother(const std::vector<SE2>& method, const 
     p.covariance = J * P_previous * J.transpose() + process;
     return p;
   };
-  const std::size_t n = method.size();
-  std::vector<Vector6> state(n);  // filtered, then smoothed in place
-  std::vector<Matrix6> P_filtered(n);
-  // The first pose: x = m - b, b from its prior.
-  state[0] << method[0].vector(), Eigen::Vector3d::Zero();
-  const Eigen::Matrix3d B0 = slow_variance.asDiagonal();
-  P_filtered[0] << R_map(method[0]) + B0, -B0, -B0, B0;
-  for (std::size_t i = 1; i < n; ++i) {
-    const Prediction p = predict(i, state[i - 1], P_filtered[i - 1]);
-    // Update with the method's pose, which measures x + b.
+  // The filter's step to state i from the filtered state i - 1: predict, then update with the
+  // method's pose, which measures x + b.
+  const auto filter = [&](std::size_t i, const Vector6& previous, const Matrix6& P_previous, Vector6& state,
+                          Matrix6& P_state) {
+    const Prediction p = predict(i, previous, P_previous);
     const Eigen::Vector3d innovation = minus(method[i].vector(), H * p.mean);
     Eigen::Matrix3d R = R_map(method[i]);
     Eigen::Matrix3d S = H * p.covariance * H.transpose() + R;
     const double m2 = innovation.dot(S.ldlt().solve(innovation));
-    if (m2 > gate) {
+    const bool beyond_gate = m2 > gate;
+    if (beyond_gate) {
       R *= m2 / gate;
       S = H * p.covariance * H.transpose() + R;
-      ++downweighted;
     }
     const Eigen::Matrix<double, 6, 3> K = (p.covariance * H.transpose()) * S.inverse();
-    state[i] = p.mean + K * innovation;
+    state = p.mean + K * innovation;
     const Matrix6 P = (Matrix6::Identity() - K * H) * p.covariance;
-    P_filtered[i] = 0.5 * (P + P.transpose());
+    P_state = 0.5 * (P + P.transpose());
+    return beyond_gate;
+  };
+  // Forward, keeping the filtered state of every segment-th scan only (a checkpoint): the
+  // backward pass filters each segment again from its checkpoint, to the bit the same states
+  // (OdometrySmoothingConfig::checkpoint_interval).
+  const std::size_t n = method.size();
+  std::vector<Vector6> checkpoint_state((n + segment - 1) / segment);
+  std::vector<Matrix6> checkpoint_P(checkpoint_state.size());
+  // The first pose: x = m - b, b from its prior.
+  Vector6 state;
+  state << method[0].vector(), Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d B0 = slow_variance.asDiagonal();
+  Matrix6 P_state;
+  P_state << R_map(method[0]) + B0, -B0, -B0, B0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0 && filter(i, Vector6(state), Matrix6(P_state), state, P_state)) ++downweighted;
+    if (i % segment == 0) checkpoint_state[i / segment] = state, checkpoint_P[i / segment] = P_state;
   }
-  // Backward: s(i) = f(i) + C (s(i+1) - p(i+1)), C = P_f(i) J(i+1)^T P_p(i+1)^-1; state[i] still
-  // holds f(i) when step i comes, state[i + 1] already s(i + 1).
-  for (std::size_t i = n - 1; i-- > 0;) {
-    const Prediction p = predict(i + 1, state[i], P_filtered[i]);
-    const Matrix6 C = p.covariance.transpose().ldlt().solve((P_filtered[i] * p.transition.transpose()).transpose()).transpose();
-    Vector6 difference = state[i + 1] - p.mean;
-    difference(2) = normalize_angle(difference(2));
-    state[i] = state[i] + C * difference;
-  }
+  // Backward, segment by segment from the last: s(i) = f(i) + C (s(i+1) - p(i+1)),
+  // C = P_f(i) J(i+1)^T P_p(i+1)^-1; the last state's smoothed value is its filtered one.
   std::vector<Eigen::Vector3d> poses(n);
-  for (std::size_t i = 0; i < n; ++i) poses[i] = state[i].head<3>();
+  std::vector<Vector6> filtered(std::min(n, segment));
+  std::vector<Matrix6> P_filtered(filtered.size());
+  Vector6 next_smoothed = Vector6::Zero();  // s(i + 1)
+  for (std::size_t k = checkpoint_state.size(); k-- > 0;) {
+    const std::size_t first = k * segment;
+    const std::size_t count = std::min(n - first, segment);
+    filtered[0] = checkpoint_state[k], P_filtered[0] = checkpoint_P[k];
+    for (std::size_t j = 1; j < count; ++j) filter(first + j, filtered[j - 1], P_filtered[j - 1], filtered[j], P_filtered[j]);
+    for (std::size_t j = count; j-- > 0;) {
+      const std::size_t i = first + j;
+      Vector6 smoothed = filtered[j];
+      if (i + 1 < n) {
+        const Prediction p = predict(i + 1, filtered[j], P_filtered[j]);
+        const Matrix6 C =
+            p.covariance.transpose().ldlt().solve((P_filtered[j] * p.transition.transpose()).transpose()).transpose();
+        Vector6 difference = next_smoothed - p.mean;
+        difference(2) = normalize_angle(difference(2));
+        smoothed += C * difference;
+      }
+      poses[i] = smoothed.head<3>();
+      next_smoothed = smoothed;
+    }
+  }
   return poses;
 }
 
@@ -420,24 +470,24 @@ void estimate_with_scan_odometry(const std::vector<SE2>& method, const std::vect
                                  const std::vector<double>& rotation_sum, const OdometrySmoothingConfig& config,
                                  PoseStreamNoise& noise) {
   const Eigen::Vector3d odometry_white = squared(noise.odometry_jitter);
-  GrowthSamples translation, rotation;
-  std::vector<LagVariance> lags;
-  bool slow_lags_left = true;
-  // The drift's lags are the first of the slow error's: each lag's samples are drawn once for both.
-  static_assert(std::equal(kLags.begin(), kLags.end(), kSlowLags.begin()));
-  for (const std::size_t k : kSlowLags) {
-    const bool drift_lag = k <= kLags.back();
-    slow_lags_left = slow_lags_left && 4 * k <= method.size();
-    if (!drift_lag && !slow_lags_left) break;
-    const std::vector<HatSample> samples = hat_samples(method, odometry, scan, k, config.trim_quantile);
-    for (const HatSample& h : drift_lag ? samples : std::span<const HatSample>{}) {
-      translation.x.push_back(translation_sum[h.first + k] - translation_sum[h.first]);
-      translation.y.push_back(h.odometry_translation - (odometry_white.x() + odometry_white.y()));
-      rotation.x.push_back(rotation_sum[h.first + k] - rotation_sum[h.first]);
-      rotation.y.push_back(h.odometry_rotation - 2.0 * odometry_white.z());
+  // The drift fit on the odometry's variances, each lag's samples drawn anew for each round.
+  const auto [translation_scale, rotation_scale] = fit_growth_scales([&](const auto& visit) {
+    for (const std::size_t k : kLags) {
+      for (const HatSample& h : hat_samples(method, odometry, scan, k, config.trim_quantile)) {
+        visit(translation_sum[h.first + k] - translation_sum[h.first],
+              h.odometry_translation - (odometry_white.x() + odometry_white.y()),
+              rotation_sum[h.first + k] - rotation_sum[h.first], h.odometry_rotation - 2.0 * odometry_white.z());
+      }
     }
-    slow_lags_left = slow_lags_left && !samples.empty();
-    if (!slow_lags_left) continue;
+  });
+  noise.translation_scale = std::clamp(translation_scale, config.min_scale, config.max_scale);
+  noise.rotation_scale = std::clamp(rotation_scale, config.min_scale, config.max_scale);
+  // The method's slow error on its own variances.
+  std::vector<LagVariance> lags;
+  for (const std::size_t k : kSlowLags) {
+    if (4 * k > method.size()) break;
+    const std::vector<HatSample> samples = hat_samples(method, odometry, scan, k, config.trim_quantile);
+    if (samples.empty()) break;
     LagVariance v{.lag = static_cast<double>(k)};
     for (const HatSample& h : samples) {
       v.translation += h.method_translation, v.rotation += h.method_rotation;
@@ -447,8 +497,6 @@ void estimate_with_scan_odometry(const std::vector<SE2>& method, const std::vect
     v.translation /= count, v.rotation /= count, v.lever /= count;
     lags.push_back(v);
   }
-  noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
-  noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
   // The heading's jitter moves each increment's end by the increment's length times it (a slow
   // heading error turns the poses around it with their positions, and the increments do not see it).
   const auto [br, taur] = fit_slow_error(lags, false, 0.0, config.max_time_constant);
@@ -478,18 +526,17 @@ PoseStreamNoise estimate_noise(const std::vector<SE2>& method, const std::vector
     estimate_with_scan_odometry(method, odometry, *scan, translation_sum, rotation_sum, config, noise);
     return noise;
   }
-  GrowthSamples translation, rotation;
-  for (const std::size_t k : kLags) {
-    for (std::size_t i = 0; i + k < n; ++i) {
-      const Eigen::Vector3d d = minus(relative(method[i], method[i + k]), relative(odometry[i], odometry[i + k]));
-      translation.x.push_back(translation_sum[i + k] - translation_sum[i]);
-      translation.y.push_back(0.5 * (d.x() * d.x() + d.y() * d.y()) - (white.x() + white.y()));
-      rotation.x.push_back(rotation_sum[i + k] - rotation_sum[i]);
-      rotation.y.push_back(d.z() * d.z() - 2.0 * white.z());
+  const auto [translation_scale, rotation_scale] = fit_growth_scales([&](const auto& visit) {
+    for (const std::size_t k : kLags) {
+      for (std::size_t i = 0; i + k < n; ++i) {
+        const Eigen::Vector3d d = minus(relative(method[i], method[i + k]), relative(odometry[i], odometry[i + k]));
+        visit(translation_sum[i + k] - translation_sum[i], 0.5 * (d.x() * d.x() + d.y() * d.y()) - (white.x() + white.y()),
+              rotation_sum[i + k] - rotation_sum[i], d.z() * d.z() - 2.0 * white.z());
+      }
     }
-  }
-  noise.translation_scale = std::clamp(fit_growth_scale(translation), config.min_scale, config.max_scale);
-  noise.rotation_scale = std::clamp(fit_growth_scale(rotation), config.min_scale, config.max_scale);
+  });
+  noise.translation_scale = std::clamp(translation_scale, config.min_scale, config.max_scale);
+  noise.rotation_scale = std::clamp(rotation_scale, config.min_scale, config.max_scale);
   return noise;
 }
 
@@ -564,7 +611,8 @@ std::vector<SE2> smooth_with_odometry(const std::vector<SE2>& method, const std:
     }
   }
   const std::vector<Eigen::Vector3d> smoothed =
-      rts_smoother(method, odometry, Q, cut, jitter, slow, config.gate_chi2, out.poses_downweighted);
+      rts_smoother(method, odometry, Q, cut, jitter, slow, config.gate_chi2, config.checkpoint_interval,
+                   out.poses_downweighted);
   std::vector<SE2> poses;
   poses.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
