@@ -13,6 +13,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "scan_pair_fixture.hpp"
@@ -127,6 +128,39 @@ TEST(CorrelativeGrid, PooledLevelsAreTheMaxOfTheLevelZeroWindowsAbove) {
         ASSERT_EQ(grid.score(level, x, y), expected) << level << " " << x << " " << y;
       }
     }
+  }
+}
+
+// A grid's rasters come from those this thread freed (correlative_grid.cpp): built after larger
+// grids of other clouds were freed, a grid holds exactly the cells of the same grid built in a
+// thread that never freed one (nothing left over from the rasters' earlier grids).
+TEST(CorrelativeGrid, ReusedRastersHoldNothingOfTheirEarlierGrids) {
+  std::mt19937 rng(11);
+  const auto random_cloud = [&](double half_side, int points) {
+    std::uniform_real_distribution<double> coordinate(-half_side, half_side);
+    std::vector<Point2> out;
+    for (int n = 0; n < points; ++n) out.emplace_back(coordinate(rng), coordinate(rng));
+    return cloud_of(std::move(out));
+  };
+  const CorrelativeGridConfig config{.resolution = 0.02, .sigma = 0.03, .truncation = 2.0, .levels = 4};
+  const PointCloud2 small = random_cloud(2.6, 40);  // rasters of about 80 KB, cached (64 KB and more)
+  std::vector<std::vector<std::uint8_t>> expected;
+  const auto cells_of = [&](const CorrelativeGrid& grid) {
+    std::vector<std::vector<std::uint8_t>> levels;
+    const auto size = static_cast<std::size_t>(grid.stride()) * static_cast<std::size_t>(grid.stored_rows());
+    for (int level = 0; level < grid.levels(); ++level) {
+      levels.emplace_back(grid.level_data(level), grid.level_data(level) + size);
+    }
+    return levels;
+  };
+  std::thread([&] { expected = cells_of(CorrelativeGrid(small, config)); }).join();
+  ASSERT_EQ(expected.size(), 4u);
+  for (int round = 0; round < 3; ++round) {
+    {
+      const CorrelativeGrid dense(random_cloud(3.0, 2000), config);  // its rasters freed full of scores
+      ASSERT_GT(static_cast<std::size_t>(dense.stride()) * dense.stored_rows(), expected[0].size());
+    }
+    EXPECT_EQ(cells_of(CorrelativeGrid(small, config)), expected) << round;
   }
 }
 

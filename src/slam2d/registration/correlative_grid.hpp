@@ -91,7 +91,7 @@ class CorrelativeGrid {
   int score(int level, int x, int y) const;
   /// The stored raster of a level: cell (x, y), with x in [-padding, width + padding), at
   /// stored_index(x, y). For matchers' inner loops.
-  const std::uint8_t* level_data(int level) const { return levels_[static_cast<std::size_t>(level)].data(); }
+  const std::uint8_t* level_data(int level) const { return levels_[static_cast<std::size_t>(level)].cells.data(); }
   std::ptrdiff_t stored_index(int x, int y) const {
     return static_cast<std::ptrdiff_t>(y + padding_) * stride_ + (x + padding_);
   }
@@ -118,7 +118,18 @@ class CorrelativeGrid {
   int padding_ = 0;
   int stride_ = 0;
   int stored_rows_ = 0;
-  std::vector<std::vector<std::uint8_t>> levels_;
+  // One level's cells. Its memory comes from, and goes back to, a few rasters this thread freed
+  // (correlative_grid.cpp): a loop closer builds a grid of megabytes for every chain it matches.
+  struct Raster {
+    std::vector<std::uint8_t> cells;
+    explicit Raster(std::size_t size);  // size cells, all 0
+    Raster(const Raster&) = default;
+    Raster(Raster&&) noexcept = default;
+    Raster& operator=(const Raster&) = default;
+    Raster& operator=(Raster&&) noexcept = default;
+    ~Raster();
+  };
+  std::vector<Raster> levels_;
   std::shared_ptr<const Target> target_;  // immutable, shared by copies
 };
 
