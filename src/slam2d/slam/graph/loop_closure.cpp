@@ -75,13 +75,22 @@ std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, d
     if (!steps || std::abs(edge.to - edge.from) != 1 || later >= steps->size() || !(*steps)[later]) return nullptr;
     return &(*steps)[later];
   };
-  std::vector<std::vector<Step>> adjacent(graph.size());
+  // The edges at each node, in the edges' order (compressed rows: two allocations, not one a node;
+  // this runs for every keyframe that searches, over the whole graph).
+  std::vector<std::size_t> first(graph.size() + 1, 0);
+  for (const PoseGraphEdge& edge : graph.edges) {
+    ++first[static_cast<std::size_t>(edge.from) + 1];
+    ++first[static_cast<std::size_t>(edge.to) + 1];
+  }
+  for (std::size_t n = 0; n < graph.size(); ++n) first[n + 1] += first[n];
+  std::vector<Step> adjacent(first.back());
+  std::vector<std::size_t> filled(first.begin(), first.end() - 1);
   for (const PoseGraphEdge& edge : graph.edges) {
     const std::optional<GraphPath>* gap = gap_step(edge);
     const double length = gap ? (*gap)->distance : edge.T_from_to.translation().norm();
     const double turn = gap ? (*gap)->turned : std::abs(edge.T_from_to.theta());
-    adjacent[static_cast<std::size_t>(edge.from)].push_back({static_cast<std::size_t>(edge.to), length, turn});
-    adjacent[static_cast<std::size_t>(edge.to)].push_back({static_cast<std::size_t>(edge.from), length, turn});
+    adjacent[filled[static_cast<std::size_t>(edge.from)]++] = {static_cast<std::size_t>(edge.to), length, turn};
+    adjacent[filled[static_cast<std::size_t>(edge.to)]++] = {static_cast<std::size_t>(edge.from), length, turn};
   }
   constexpr double kUnreached = std::numeric_limits<double>::infinity();
   std::vector<GraphPath> paths(graph.size(), GraphPath{.distance = kUnreached, .turned = kUnreached});
@@ -95,7 +104,8 @@ std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, d
     queue.pop();
     if (done[node]) continue;
     done[node] = true;
-    for (const Step& step : adjacent[node]) {
+    for (std::size_t k = first[node]; k < first[node + 1]; ++k) {
+      const Step& step = adjacent[k];
       const double distance = paths[node].distance + step.length;
       if (distance <= max_distance && distance < paths[step.to].distance) {
         paths[step.to] = {.distance = distance, .turned = paths[node].turned + step.turn};
