@@ -298,7 +298,8 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
   run.method_summary.add("scan_gaps", stats.gaps).add("gaps_tracked_through", stats.gaps_tracked_through);
   run.method_summary.add("optimization_iterations", stats.optimization_iterations)
-      .add("deferred_optimizations", stats.deferred_optimizations);
+      .add("deferred_optimizations", stats.deferred_optimizations)
+      .add("local_optimizations", stats.local_optimizations);
   run.method_summary.add("optimization_s", stats.optimization_seconds).add("final_chi2", chi2(slam.graph()));
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());

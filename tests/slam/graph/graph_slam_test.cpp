@@ -289,6 +289,23 @@ TEST(GraphSlamSchedule, DefersAClosureOfALaterLapThatAgreesWithTheMap) {
   EXPECT_LT(deferred.ate_rmse, std::max(0.05, 1.2 * karto.ate_rmse)) << "after every closure: " << karto.ate_rmse;
 }
 
+// A closure whose cycle along the graph is short (local_reach) is optimised over the nodes within
+// that cycle of its ends, the rest held: on the ring's later laps such optimisations happen, and
+// the trajectory (finish() optimises the whole graph) is as good as with every optimisation of the
+// whole graph. The ten passes of the real logs:
+// docs/methods/graph_slam.md, "The back end's schedule".
+TEST(GraphSlamSchedule, AShortCycleIsOptimisedOverItsNeighbourhood) {
+  GraphSlamConfig whole;
+  whole.local_reach = 0.0;
+  const RingLaps all = drive_ring(whole);
+  const RingLaps local = drive_ring({});  // on by default
+  EXPECT_EQ(all.stats.local_optimizations, 0u);
+  ASSERT_GT(local.stats.loop_closures, 5u);
+  EXPECT_GE(local.stats.local_optimizations, 1u);
+  EXPECT_LE(local.stats.local_optimizations, local.stats.optimizations);
+  EXPECT_LT(local.ate_rmse, std::max(0.05, 1.2 * all.ate_rmse)) << "whole graph: " << all.ate_rmse;
+}
+
 TEST(GraphSlamLifelong, RejectsOutOfRangeBudgets) {
   GraphSlamConfig config;
   config.keyframes.redundant_radius = -0.5;

@@ -290,16 +290,19 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
     if (checked(closure) && !new_large_added) continue;
     if (!checked(closure)) {
       if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
+      if (!closure.near()) pending_cycle_ = std::max(pending_cycle_, cycle_length(closure.edge, config_.local_reach));
       graph_.edges.push_back(closure.edge);
       loop_closed = loop_closed || !closure.near();
     }
     record_closure(closure, final);
   }
   if (loop_closed) {
-    if (!config_.defer_agreeing_closures || new_loop || estimate_disagrees()) {
-      optimize(config_.run_relative_tolerance);
-    } else {
+    if (config_.defer_agreeing_closures && !new_loop && !estimate_disagrees()) {
       ++stats_.deferred_optimizations;
+    } else if (config_.local_reach > 0.0 && pending_cycle_ <= config_.local_reach) {
+      optimize_locally(pending_cycle_);
+    } else {
+      optimize(config_.run_relative_tolerance);
     }
   }
   if (lifelong()) {
@@ -526,11 +529,14 @@ void GraphSlam::copy_loop_stats() {
 
 // Whether the edge joins two keyframes the graph does not yet hold together: no path along its edges
 // within link_reach() (a loop closed for the first time, not a revisit of a place already closed).
-bool GraphSlam::closes_new_loop(const PoseGraphEdge& edge) const {
-  const double reach = link_reach();
+bool GraphSlam::closes_new_loop(const PoseGraphEdge& edge) const { return !(cycle_length(edge, link_reach()) <= link_reach()); }
+
+// The shortest path along the graph's edges between the edge's two nodes (the cycle the edge
+// closes), in metres; infinite beyond `reach`.
+double GraphSlam::cycle_length(const PoseGraphEdge& edge, double reach) const {
   const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes_, graph_.size(), config_.loop_closure.drift);
   const std::vector<GraphPath> paths = graph_paths(graph_, static_cast<std::size_t>(edge.to), reach, &gaps);
-  return !(paths[static_cast<std::size_t>(edge.from)].distance <= reach);
+  return paths[static_cast<std::size_t>(edge.from)].distance;
 }
 
 // Whether the loop edges added since the last optimisation disagree with the current poses beyond
@@ -550,10 +556,39 @@ bool GraphSlam::estimate_disagrees() const {
 
 void GraphSlam::optimize(double relative_tolerance) {
   first_unoptimized_edge_ = graph_.edges.size();
+  pending_cycle_ = 0.0;
   const SparsePoseAdjustmentResult result = back_end_.optimize(graph_, relative_tolerance);
   stats_.optimization_seconds += result.seconds;
   ++stats_.optimizations;
   stats_.optimization_iterations += static_cast<std::size_t>(result.iterations);
+}
+
+// An optimisation of the closures' neighbourhood (local_reach): the nodes within `radius` (the
+// longest cycle the loop edges not yet optimised close, at least kMinLocalRadius) along the
+// graph's edges of those edges' ends are free, every cycle's nodes among them, the others fixed;
+// the whole graph when that frees every node.
+void GraphSlam::optimize_locally(double radius) {
+  constexpr double kMinLocalRadius = 5.0;  // m
+  radius = std::max(radius, kMinLocalRadius);
+  const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes_, graph_.size(), config_.loop_closure.drift);
+  std::vector<bool> fixed(graph_.size(), true);
+  for (std::size_t k = first_unoptimized_edge_; k < graph_.edges.size(); ++k) {
+    const PoseGraphEdge& edge = graph_.edges[k];
+    if (!loop_edge(edge)) continue;
+    for (const int end : {edge.from, edge.to}) {
+      const std::vector<bool> near =
+          nodes_within_graph_distance(graph_, static_cast<std::size_t>(end), radius, &gaps);
+      for (std::size_t n = 0; n < near.size(); ++n) fixed[n] = fixed[n] && !near[n];
+    }
+  }
+  if (std::find(fixed.begin(), fixed.end(), true) == fixed.end()) {
+    optimize(config_.run_relative_tolerance);
+    return;
+  }
+  graph_.fixed = std::move(fixed);
+  optimize(config_.run_relative_tolerance);
+  graph_.fixed.clear();
+  ++stats_.local_optimizations;
 }
 
 void GraphSlam::finish() {
