@@ -35,10 +35,15 @@ SE2 OdometryChain::at(std::size_t k, double time) const {
   return interpolate(before.pose, next.pose, (time - before.stamp) / (next.stamp - before.stamp));
 }
 
+std::optional<ChainSample> chain_sample(std::size_t index, const SensorMessage& message) {
+  if (!in_laser_chain(message)) return std::nullopt;
+  return ChainSample{index, stamp_of(message), odometry_pose(message)};
+}
+
 OdometryChain laser_odometry_chain(const std::vector<SensorMessage>& messages) {
   std::vector<ChainSample> samples;
   for (std::size_t i = 0; i < messages.size(); ++i) {
-    if (in_laser_chain(messages[i])) samples.push_back({i, stamp_of(messages[i]), odometry_pose(messages[i])});
+    if (const std::optional<ChainSample> sample = chain_sample(i, messages[i])) samples.push_back(*sample);
   }
   return OdometryChain(std::move(samples));
 }

@@ -20,6 +20,7 @@
 // held beyond either end. A log whose stamps never advance (Örebro's are all 0) gives the end poses.
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "slam2d/core/se2.hpp"
@@ -58,6 +59,9 @@ class OdometryChain {
 
 /// Whether a message belongs to the laser chain: a laser line with poses, or TRUEPOS.
 bool in_laser_chain(const SensorMessage& message);
+
+/// Message `index`'s sample of the laser chain; none when it is not in the chain.
+std::optional<ChainSample> chain_sample(std::size_t index, const SensorMessage& message);
 
 /// The laser chain of `messages` (laser lines with poses and TRUEPOS, in file order).
 OdometryChain laser_odometry_chain(const std::vector<SensorMessage>& messages);

@@ -265,20 +265,20 @@ OdometryTimeOffset estimate(const TimeOffsetInput& input, const OdometryTimeOffs
   return result;
 }
 
-// The whole log held: every scan kept.
-TimeOffsetInput input_of(const std::vector<SensorMessage>& messages) {
+// The whole log read, every scan kept or none.
+TimeOffsetInput input_of(const std::vector<SensorMessage>& messages, bool with_scans) {
   TimeOffsetInput input;
-  for (const SensorMessage& message : messages) input.add(message, /*with_scan=*/true);
+  for (const SensorMessage& message : messages) input.add(message, with_scans);
   return input;
 }
 
 }  // namespace
 
 void TimeOffsetInput::add(const SensorMessage& message, bool with_scan) {
-  const std::size_t index = messages_++;
-  if (!in_laser_chain(message)) return;
+  const std::optional<ChainSample> sample = chain_sample(messages_++, message);
+  if (!sample) return;
   const std::size_t entry = samples_.size();
-  samples_.push_back({index, stamp_of(message), odometry_pose(message)});
+  samples_.push_back(*sample);
   const auto* laser = std::get_if<LaserMessage>(&message);
   if (laser == nullptr) return;
   if (!type_) type_ = laser->type;
@@ -327,9 +327,7 @@ std::vector<std::size_t> odometry_time_offset_scans(const TimeOffsetInput& input
 
 std::vector<std::size_t> odometry_time_offset_scans(const std::vector<SensorMessage>& messages,
                                                     const OdometryTimeOffsetConfig& config) {
-  TimeOffsetInput input;
-  for (const SensorMessage& message : messages) input.add(message, /*with_scan=*/false);
-  return odometry_time_offset_scans(input, config);
+  return odometry_time_offset_scans(input_of(messages, /*with_scans=*/false), config);
 }
 
 OdometryTimeOffset estimate_odometry_time_offset(const TimeOffsetInput& input, const OdometryTimeOffsetConfig& config) {
@@ -342,7 +340,7 @@ OdometryTimeOffset estimate_odometry_time_offset(const TimeOffsetInput& input, c
 
 OdometryTimeOffset estimate_odometry_time_offset(const std::vector<SensorMessage>& messages,
                                                  const OdometryTimeOffsetConfig& config) {
-  return estimate_odometry_time_offset(input_of(messages), config);
+  return estimate_odometry_time_offset(input_of(messages, /*with_scans=*/true), config);
 }
 
 }  // namespace slam2d

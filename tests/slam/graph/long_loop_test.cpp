@@ -127,6 +127,15 @@ TEST(GraphPaths, FollowTheShortestWayAndCountTheTurns) {
   const std::vector<GraphPath> bounded = graph_paths(graph, 4, 5.0);
   EXPECT_TRUE(std::isinf(bounded[2].distance));
   EXPECT_EQ(nodes_within_graph_distance(graph, 4, 5.0), (std::vector<bool>{true, false, false, false, true}));
+  // From several sources: the nearest one's path, as the least of the single-source searches.
+  const std::vector<std::size_t> sources{1, 3};
+  const std::vector<GraphPath> nearest = graph_paths(graph, sources);
+  for (std::size_t n = 0; n < graph.size(); ++n) {
+    EXPECT_DOUBLE_EQ(nearest[n].distance, std::min(graph_paths(graph, 1)[n].distance, graph_paths(graph, 3)[n].distance));
+  }
+  EXPECT_DOUBLE_EQ(nearest[4].distance, 10.0);
+  EXPECT_EQ(nodes_within_graph_distance(graph, sources, 9.0), (std::vector<bool>{false, true, false, true, false}));
+  EXPECT_EQ(nodes_within_graph_distance(graph, sources, 10.0), (std::vector<bool>{true, true, true, true, true}));
 }
 
 // A gap in the scans between nodes 1 and 2 of a straight line of 10 m steps: the step across it

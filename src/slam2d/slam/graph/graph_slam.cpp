@@ -289,8 +289,12 @@ int GraphSlam::add_closures(const std::vector<LoopClosure>& closures, bool final
   for (const LoopClosure& closure : closures) {
     if (checked(closure) && !new_large_added) continue;
     if (!checked(closure)) {
-      if (!closure.near() && config_.defer_agreeing_closures) new_loop = new_loop || closes_new_loop(closure.edge);
-      if (!closure.near()) pending_cycle_ = std::max(pending_cycle_, cycle_length(closure.edge, config_.local_reach));
+      if (!closure.near() && (config_.defer_agreeing_closures || config_.local_reach > 0.0)) {
+        // The cycle the edge closes: a new loop beyond link_reach(), optimised locally within local_reach.
+        const double cycle = cycle_length(closure.edge, std::max(link_reach(), config_.local_reach));
+        new_loop = new_loop || !(cycle <= link_reach());
+        pending_cycle_ = std::max(pending_cycle_, cycle <= config_.local_reach ? cycle : std::numeric_limits<double>::infinity());
+      }
       graph_.edges.push_back(closure.edge);
       loop_closed = loop_closed || !closure.near();
     }
@@ -527,10 +531,6 @@ void GraphSlam::copy_loop_stats() {
   stats_.held_dropped = loops.held_dropped;
 }
 
-// Whether the edge joins two keyframes the graph does not yet hold together: no path along its edges
-// within link_reach() (a loop closed for the first time, not a revisit of a place already closed).
-bool GraphSlam::closes_new_loop(const PoseGraphEdge& edge) const { return !(cycle_length(edge, link_reach()) <= link_reach()); }
-
 // The shortest path along the graph's edges between the edge's two nodes (the cycle the edge
 // closes), in metres; infinite beyond `reach`.
 double GraphSlam::cycle_length(const PoseGraphEdge& edge, double reach) const {
@@ -571,16 +571,15 @@ void GraphSlam::optimize_locally(double radius) {
   constexpr double kMinLocalRadius = 5.0;  // m
   radius = std::max(radius, kMinLocalRadius);
   const std::vector<std::optional<GraphPath>> gaps = gap_steps(keyframes_, graph_.size(), config_.loop_closure.drift);
-  std::vector<bool> fixed(graph_.size(), true);
+  std::vector<std::size_t> ends;
   for (std::size_t k = first_unoptimized_edge_; k < graph_.edges.size(); ++k) {
     const PoseGraphEdge& edge = graph_.edges[k];
     if (!loop_edge(edge)) continue;
-    for (const int end : {edge.from, edge.to}) {
-      const std::vector<bool> near =
-          nodes_within_graph_distance(graph_, static_cast<std::size_t>(end), radius, &gaps);
-      for (std::size_t n = 0; n < near.size(); ++n) fixed[n] = fixed[n] && !near[n];
-    }
+    ends.push_back(static_cast<std::size_t>(edge.from));
+    ends.push_back(static_cast<std::size_t>(edge.to));
   }
+  std::vector<bool> fixed = nodes_within_graph_distance(graph_, ends, radius, &gaps);
+  fixed.flip();  // within reach of an end: free
   if (std::find(fixed.begin(), fixed.end(), true) == fixed.end()) {
     optimize(config_.run_relative_tolerance);
     return;

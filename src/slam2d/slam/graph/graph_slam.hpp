@@ -286,7 +286,6 @@ class GraphSlam {
   void copy_loop_stats();
   void optimize(double relative_tolerance);
   void optimize_locally(double radius);
-  bool closes_new_loop(const PoseGraphEdge& edge) const;
   double cycle_length(const PoseGraphEdge& edge, double reach) const;
   bool estimate_disagrees() const;
   std::vector<LoopClosure> supported_large_closures(const std::vector<LoopClosure>& large);

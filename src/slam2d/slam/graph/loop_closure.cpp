@@ -64,7 +64,7 @@ std::vector<std::optional<GraphPath>> gap_steps(const std::vector<Keyframe>& key
   return steps;
 }
 
-std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, double max_distance,
+std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::span<const std::size_t> sources, double max_distance,
                                    const std::vector<std::optional<GraphPath>>* steps) {
   struct Step {
     std::size_t to;
@@ -97,8 +97,10 @@ std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, d
   std::vector<bool> done(graph.size(), false);
   using Entry = std::pair<double, std::size_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
-  paths[source] = {};
-  queue.emplace(0.0, source);
+  for (const std::size_t source : sources) {
+    paths[source] = {};
+    queue.emplace(0.0, source);
+  }
   while (!queue.empty()) {
     const std::size_t node = queue.top().second;
     queue.pop();
@@ -116,9 +118,9 @@ std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source, d
   return paths;
 }
 
-std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance,
-                                              const std::vector<std::optional<GraphPath>>* steps) {
-  const std::vector<GraphPath> paths = graph_paths(graph, source, max_distance, steps);
+std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::span<const std::size_t> sources,
+                                              double max_distance, const std::vector<std::optional<GraphPath>>* steps) {
+  const std::vector<GraphPath> paths = graph_paths(graph, sources, max_distance, steps);
   std::vector<bool> reached(paths.size());
   for (std::size_t n = 0; n < paths.size(); ++n) reached[n] = paths[n].distance <= max_distance;
   return reached;

@@ -40,6 +40,7 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "slam2d/core/scan_gaps.hpp"
@@ -281,17 +282,27 @@ void validate(const LoopClosureConfig& config);
 std::vector<std::optional<GraphPath>> gap_steps(const std::vector<Keyframe>& keyframes, std::size_t nodes,
                                                 const DriftModel& model);
 
-/// The shortest paths (by distance travelled, Dijkstra) from `source` to every node, up to
-/// `max_distance` (farther nodes: infinity). An edge between nodes n - 1 and n counts the step
+/// The shortest paths (by distance travelled, Dijkstra) from the nearest of `sources` to every node,
+/// up to `max_distance` (farther nodes: infinity). An edge between nodes n - 1 and n counts the step
 /// `steps` (if given) holds for n instead of its own translation and rotation.
-std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source,
+std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::span<const std::size_t> sources,
                                    double max_distance = std::numeric_limits<double>::infinity(),
                                    const std::vector<std::optional<GraphPath>>* steps = nullptr);
+inline std::vector<GraphPath> graph_paths(const PoseGraph& graph, std::size_t source,
+                                          double max_distance = std::numeric_limits<double>::infinity(),
+                                          const std::vector<std::optional<GraphPath>>* steps = nullptr) {
+  return graph_paths(graph, std::span<const std::size_t>(&source, 1), max_distance, steps);
+}
 
-/// The nodes reachable from `source` along edges whose translations sum to at most `max_distance`
-/// (Dijkstra; `steps` as for graph_paths), as a flag per node.
-std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance,
+/// The nodes reachable from one of `sources` along edges whose translations sum to at most
+/// `max_distance` (Dijkstra; `steps` as for graph_paths), as a flag per node.
+std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::span<const std::size_t> sources,
+                                              double max_distance,
                                               const std::vector<std::optional<GraphPath>>* steps = nullptr);
+inline std::vector<bool> nodes_within_graph_distance(const PoseGraph& graph, std::size_t source, double max_distance,
+                                                     const std::vector<std::optional<GraphPath>>* steps = nullptr) {
+  return nodes_within_graph_distance(graph, std::span<const std::size_t>(&source, 1), max_distance, steps);
+}
 
 /// Runs of consecutive keyframe indices (sorted input) of at least `min_size` elements, as [begin, end).
 std::vector<std::pair<std::size_t, std::size_t>> group_into_chains(const std::vector<std::size_t>& sorted_candidates,
