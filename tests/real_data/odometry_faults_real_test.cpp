@@ -108,14 +108,15 @@ TEST(OdometryStallRealData, GraphSlamCountsNoTurnTwiceAfterAFreezeThatBeganAtRes
 
 // Without the guard the frozen increments are trusted and the stalls counted twice. The tracker's
 // prior weighed by the odometry's learnt noise (the default since 2026-12-03) softens it: ACES
-// 0.056 m against 0.081 m with the fixed prior, still well above the guarded run.
+// 0.056 m against 0.081 m with the fixed prior, and 0.052 m since a rotated start that contradicts
+// the prior must explain the scan (2026-12-05), still well above the guarded run.
 TEST(OdometryStallRealData, WithoutTheGuardGraphSlamCountsTheStallsTwice) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<LaserMessage> scans = stalled_scans(data / "aces/aces.clf.gz");
   const std::vector<Relation> relations = read_relations((data / "aces/aces.relations").string());
   const GraphRun unguarded = run_graph(scans, relations, false);
   const GraphRun guarded = run_graph(scans, relations, true);
-  EXPECT_GT(unguarded.error.translation.mean, 1.3 * guarded.error.translation.mean);  // measured 0.0562 m and 0.0403 m
+  EXPECT_GT(unguarded.error.translation.mean, 1.2 * guarded.error.translation.mean);  // measured 0.0522 m and 0.0403 m
   EXPECT_EQ(unguarded.odometry.untrusted(), 0u);
 }
 

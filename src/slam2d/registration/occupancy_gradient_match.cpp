@@ -38,14 +38,38 @@ NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector
   return equations;
 }
 
-void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior) {
+namespace {
+
+Eigen::Vector3d prior_residual(const SE2& T_map_robot, const PosePrior& prior) {
   Eigen::Vector3d r = T_map_robot.vector() - prior.mean.vector();
   r.z() = normalize_angle(r.z());
+  return r;
+}
+
+}  // namespace
+
+double prior_distance(const SE2& T_map_robot, const PosePrior& prior) {
+  const Eigen::Vector3d r = prior_residual(T_map_robot, prior);
+  return std::sqrt(r.dot(prior.information * r));
+}
+
+void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior) {
+  const Eigen::Vector3d r = prior_residual(T_map_robot, prior);
   const double distance = std::sqrt(r.dot(prior.information * r));  // Mahalanobis
   const double weight = prior.kernel.weight(distance);
   equations.H += weight * prior.information;  // J = I
   equations.b += weight * prior.information * r;
   equations.cost += prior.kernel.cost(distance);
+}
+
+double explained_share(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot, const SE2& T_map_robot) {
+  if (points_robot.empty()) return 0.0;
+  OccupancyInterpolator interpolate(grid);
+  std::size_t explained = 0;
+  for (const Eigen::Vector2d& p : points_robot) {
+    if (interpolate(T_map_robot * p).value > kExplainedOccupancy) ++explained;
+  }
+  return static_cast<double>(explained) / static_cast<double>(points_robot.size());
 }
 
 namespace {
@@ -135,7 +159,19 @@ LevenbergMarquardtResult<3> fit_on_grid(const OccupancyGrid& grid, const std::ve
   return levenberg_marquardt<3>(cost, T_map_robot_guess.vector(), gauss_newton_options(config, iterations));
 }
 
-// The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost wins.
+// Whether a rotated start's fit may overrule the guess (HectorMatcherConfig::rotation_search_min_explained):
+// within the prior kernel's scale it agrees with the prior; beyond it, only a fit that explains the scan.
+bool may_overrule(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
+                  const LevenbergMarquardtResult<3>& fit, const HectorMatcherConfig& config,
+                  const std::optional<PosePrior>& prior) {
+  if (!prior || config.rotation_search_min_explained <= 0.0) return true;
+  const SE2 pose = SE2::from_vector(fit.x);
+  if (prior_distance(pose, *prior) <= prior->kernel.scale) return true;
+  return explained_share(grid, points_robot, pose) >= config.rotation_search_min_explained;
+}
+
+// The multi-start of HectorMatcherConfig::rotation_search_range on one grid: the lowest final cost
+// wins, a rotated start only by the margin and where it may_overrule the guess.
 LevenbergMarquardtResult<3> fit_with_rotation_search(const OccupancyGrid& grid,
                                                      const std::vector<Eigen::Vector2d>& points_robot, const SE2& guess,
                                                      int iterations, const HectorMatcherConfig& config,
@@ -148,7 +184,8 @@ LevenbergMarquardtResult<3> fit_with_rotation_search(const OccupancyGrid& grid,
     LevenbergMarquardtResult<3> candidate = fit_on_grid(grid, points_robot, start, iterations, config, prior);
     // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
     // round hall) near-equal costs would otherwise pick a far heading at random.
-    if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost) {
+    if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost &&
+        may_overrule(grid, points_robot, candidate, config, prior)) {
       best = std::move(candidate);
     }
   }

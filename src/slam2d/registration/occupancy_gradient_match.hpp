@@ -57,6 +57,15 @@ struct HectorMatcherConfig {
   double rotation_search_range = 0.2;  // rad, >= 0
   double rotation_search_step = 0.1;   // rad, > 0
   double rotation_search_margin = 0.0; // 1, in [0, 1): relative cost drop a rotated start needs to win
+  // A rotated start that ends farther from the pose prior than the prior kernel's scale contradicts
+  // the odometry; it wins only if it explains the scan: at least this share of the points on the
+  // map's occupied cells (interpolated occupancy above kExplainedOccupancy). A lower cost alone is
+  // no evidence against the odometry's heading: on a scan the map cannot explain (new ground, a
+  // sparse outdoor view) a turned pose lowers it by moving points from free into unknown space or
+  // onto scattered clutter (Freiburg campus with its exact odometry: 5-12 deg turns, graph SLAM
+  // 6.05 m ATE). Without a prior there is nothing to contradict. 0: the lower cost wins.
+  // Picked on Freiburg campus and Intel with its odometry shifted (docs/defaults.md).
+  double rotation_search_min_explained = 0.5;  // 1, in [0, 1]
   // Solution remapping (J. Zhang, M. Kaess, S. Singh, "On degeneracy of optimization-based state
   // estimation problems", ICRA 2016; not in Hector): each step is projected onto the eigenvectors
   // of the scan's own information (H without the prior) whose eigenvalue exceeds this fraction of
@@ -78,6 +87,8 @@ void describe(Fields& f, HectorMatcherConfig& c) {
   f.number("rotation_search_range", c.rotation_search_range, "rad", at_least(0), "multi-start on the coarsest level over the guess rotated by k * step (0: off)");
   f.number("rotation_search_step", c.rotation_search_step, "rad", greater_than(0), "");
   f.number("rotation_search_margin", c.rotation_search_margin, "1", closed_open(0, 1), "relative cost drop a rotated start needs to win");
+  f.number("rotation_search_min_explained", c.rotation_search_min_explained, "1", between(0, 1),
+           "share of the scan a rotated start beyond the prior kernel's scale must put on occupied cells to win (0: the lower cost wins)");
   f.number("degeneracy_ratio", c.degeneracy_ratio, "1", closed_open(0, 1),
            "solution remapping (Zhang et al. 2016): steps projected onto the scan's eigenvectors above this fraction of the largest (0: off)");
 }
@@ -95,8 +106,19 @@ struct PosePrior {
   RobustKernel kernel{};
 };
 
+/// The prior's Mahalanobis distance sqrt(r^T information r) at pose xi, r = xi - mean (angle wrapped).
+double prior_distance(const SE2& T_map_robot, const PosePrior& prior);
+
 /// Adds the prior's residual at pose xi to the equations.
 void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior);
+
+/// The interpolated occupancy above which a scan point counts as explained by the map: more likely
+/// occupied than not, on or beside an occupied cell (a wall's face reads about 0.55, half a cell
+/// before the cell's centre), never in unknown (exactly 0.5) or free space.
+inline constexpr double kExplainedOccupancy = 0.5;
+
+/// The share of the points that land on the map's occupied cells at T_map_robot (0 for none).
+double explained_share(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot, const SE2& T_map_robot);
 
 /// Throws Error for iteration counts < 1 or a non-positive, non-finite step clamp.
 void validate(const HectorMatcherConfig& config);
