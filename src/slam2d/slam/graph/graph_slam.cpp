@@ -41,7 +41,7 @@ HectorSlamConfig default_tracking_config() {
   HectorSlamConfig config;
   config.prior_from_motion_noise = true;         // the prior weighed by the odometry's learnt noise,
   config.prior_kernel = kOdometryPriorKernel;    // under Hector's Cauchy kernel: the scan wins far off,
-  config.recovery_residual = 0.25;               // and a poor fit is retried over every heading;
+  config.recovery_residual = 0.25;               // a poor fit is retried within a quarter turn;
   config.prior_information_translation = 100.0;  // until a match has told the noise (and where the
   config.prior_information_rotation = 300.0;     // odometry is Hector's: map_job), sigma 0.1 m, 0.058 rad
   config.prior_sigma_per_metre = 0.0;            // for every increment,

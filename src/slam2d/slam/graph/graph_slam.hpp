@@ -71,8 +71,8 @@ namespace slam2d {
 /// The tracker's configuration: Hector's, with a prior at the odometry's prediction weighed by the
 /// odometry's own uncertainty (HectorSlamConfig::prior_from_motion_noise: the prediction's
 /// covariance from the motion noise model whose scale the tracker learns from how the matches
-/// agree with the odometry) under a Cauchy kernel, a retry over every heading after a poor fit
-/// (recovery_residual 0.25, as without odometry), and solution remapping
+/// agree with the odometry) under a Cauchy kernel, a retry within a quarter turn after a poor fit
+/// (recovery_residual 0.25, as without odometry, where it searches every heading), and solution remapping
 /// (HectorMatcherConfig::degeneracy_ratio 0.01), which keeps the directions a scan leaves open (a
 /// corridor's axis) at the odometry. Until the first match, and where the odometry is not a sensor
 /// of its own (Hector's poses: map_job), the prior is the fixed weak one (sigma 0.1 m, 0.058 rad).

@@ -94,7 +94,8 @@ struct HectorSlamConfig {
   // (docs/fusion_by_uncertainty.md, "The double count, measured").
   bool prior_from_motion_noise = false;
   // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
-  // retried with a rotation search over every heading, kept when it fits a fifth better. Off with
+  // retried with a rotation search (a quarter turn either way from a trusted odometry increment's
+  // prediction, every heading without one), kept when it fits a fifth better. Off with
   // odometry (picked on ACES, not yet checked on a held-out log: docs/defaults.md).
   double recovery_residual = 1.0;
   // Without odometry (prior != kOdometry) these replace the settings above and the matcher's:
