@@ -70,7 +70,9 @@ struct HectorSlamConfig {
   // (FR079's odometry counting a reverse as forward driving). No prior on the heading by default:
   // the scan fixes it, and odometry headings are what fail (wheel slip in turns). Picked on ACES
   // and Intel (stall phases, range-noise seeds); FR079, the odometry faults and a fast-turning
-  // simulation held out (docs/defaults.md). Zero information disables a component.
+  // simulation held out (docs/defaults.md). Zero information disables a component. With
+  // prior_from_motion_noise (graph SLAM's tracker's default) they hold only until a match has told
+  // the noise.
   double prior_information_translation = 1000.0;
   double prior_information_rotation = 0.0;
   double prior_sigma_per_metre = 0.1;
@@ -86,17 +88,21 @@ struct HectorSlamConfig {
   // match's residual variance s^2 (the scan's own information is H / s^2, so the prior's in the
   // normal equations is s^2 P^-1). A good odometry so holds the match where the scan says little
   // (glass, a thin or noisy scan), a poor one lets the scan lead. The kernel above still applies.
-  // Off by default. On graph SLAM's tracker (with the Cauchy kernel) it holds ACES with three
-  // glass sectors at 0.053 m against 1.00 m and lowers the noisy-laser and mixed-pixel errors on
-  // Intel and ACES, at about the clean figures over noise seeds; but graph SLAM then leaves a
-  // simulated 14 m drift open, with or without its odometry edges (which would count the odometry
-  // a second time): the tracker leaves a blind stretch with a drift the loop closer does not take
-  // (docs/fusion_by_uncertainty.md, "The double count, measured").
+  // On graph SLAM's tracker (with the Cauchy kernel) it holds ACES with three glass sectors at
+  // 0.053 m against 1.00 m and lowers the noisy-laser and mixed-pixel errors on Intel and ACES
+  // (docs/fusion_by_uncertainty.md, "The double count, measured"). Off for Hector: with the retry
+  // below (recovery_residual 0.25) it keeps Freiburg campus's exact odometry (53.8 -> 4.2 m ATE),
+  // Intel with its odometry out of step in time (0.8-1.7 -> 0.02-0.09 m) and FR079 at 1 Hz (0.40 ->
+  // 0.044 m), but follows a drifting odometry where Hector has no loops to take it back (Intel's
+  // 1 cm noise seeds up to 0.061 m, Edmonton degraded 0.27 -> 1.39 m ATE), and correcting the
+  // drift loses ACES's loop: docs/fusion_by_uncertainty.md, "Hector weighing its odometry".
   bool prior_from_motion_noise = false;
   // Recovery (not in the paper): a match whose mean squared residual (1 - M)^2 exceeds this is
   // retried with a rotation search (a quarter turn either way from a trusted odometry increment's
-  // prediction, every heading without one), kept when it fits a fifth better. Off with
-  // odometry (picked on ACES, not yet checked on a held-out log: docs/defaults.md).
+  // prediction, every heading without one), kept when it fits a fifth better and, against a
+  // trusted increment, explains the scan (matcher.rotation_search_min_explained). Off with odometry:
+  // with the translation-only prior of constant weight it turns the robot round in ACES's
+  // look-alike corridors (0.054 -> 1.66 m); graph SLAM's tracker, with the weighed prior, uses 0.25.
   double recovery_residual = 1.0;
   // Without odometry (prior != kOdometry) these replace the settings above and the matcher's:
   // the robot may have turned far between two scans (or during a gap in the log), and in round
@@ -132,7 +138,10 @@ struct HectorSlamConfig {
   // in the geometric mean), but ACES, whose odometry has little to correct, loses a loop in two
   // runs of four (0.0381 -> 0.0413 m clean); over 100 stretches the fit follows the heavy-tailed
   // errors of an odometry shifted in time (Intel 0.3 s ahead 0.06 -> 1.2 m):
-  // docs/fusion_by_uncertainty.md, "The odometry's systematic error in the tracker".
+  // docs/fusion_by_uncertainty.md, "The odometry's systematic error in the tracker". With Hector's
+  // weighed prior and retry, over 100 stretches it mends Edmonton's degraded odometry (1.39 ->
+  // 0.64 m ATE) but loses ACES's loop (0.045 -> 0.097 m, with a 198 s gap 0.15 m), over 1000
+  // FHW's (0.20 -> 2.79 m): docs/fusion_by_uncertainty.md, "Hector weighing its odometry".
   OdometryCalibrationConfig odometry_calibration{.window = 0.0};
   MatchNoiseConfig match_noise{.floor_translation = 0.0, .floor_rotation = 0.0};
   double fusion_gate = kMotionGateChi2;
