@@ -151,18 +151,11 @@ TEST(GraphSlamRealData, APriorWeighedByTheMotionNoiseHoldsGlassOverGoodOdometry)
 // contradicts the prior must explain the scan, HectorMatcherConfig::rotation_search_min_explained).
 // Stamped by index, as the robustness benchmark does: the log's stamps do not increase.
 double freiburg_campus_ate(const std::filesystem::path& data, const GraphSlamConfig& config) {
+  const test::CorrectedScans campus = test::read_corrected_flaser(data / "carmen-corrected/freiburg-campus-corrected.log.gz");
   GraphSlam slam(config);
-  Trajectory reference;
-  CarmenReader reader((data / "carmen-corrected/freiburg-campus-corrected.log.gz").string());
-  while (auto message = reader.next()) {
-    auto* laser = std::get_if<LaserMessage>(&*message);
-    if (laser == nullptr || laser->type != "FLASER") continue;
-    laser->scan.stamp = static_cast<double>(reference.size());
-    reference.push_back(laser->scan.stamp, laser->odom_pose);
-    slam.add_scan(laser->scan, laser->odom_pose);
-  }
+  for (const LaserMessage& laser : campus.scans) slam.add_scan(laser.scan, laser.odom_pose);
   slam.finish();
-  return absolute_trajectory_error(slam.trajectory(), reference).rmse;
+  return absolute_trajectory_error(slam.trajectory(), campus.reference).rmse;
 }
 
 TEST(GraphSlamRealData, StaysNearFreiburgCampussExactOdometry) {

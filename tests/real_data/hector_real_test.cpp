@@ -10,12 +10,10 @@
 #include <algorithm>
 #include <iostream>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "slam2d/eval/ate.hpp"
 #include "slam2d/eval/relation_error.hpp"
-#include "slam2d/io/carmen.hpp"
 #include "slam2d/io/relations.hpp"
 #include "slam2d/slam/graph/graph_slam.hpp"
 #include "slam2d/slam/hector/hector_slam.hpp"
@@ -158,17 +156,10 @@ HectorSlamConfig weighed_prior_and_retry() {
 // 53.5 m when the retry alone was not gated, before 2026-12-05; 7.7 m with neither gated).
 // Stamped by index, as the robustness benchmark does: the log's stamps do not increase.
 double freiburg_campus_ate(const std::filesystem::path& data, const HectorSlamConfig& config) {
+  const test::CorrectedScans campus = test::read_corrected_flaser(data / "carmen-corrected/freiburg-campus-corrected.log.gz");
   HectorSlam slam(config);
-  Trajectory reference;
-  CarmenReader reader((data / "carmen-corrected/freiburg-campus-corrected.log.gz").string());
-  while (auto message = reader.next()) {
-    auto* laser = std::get_if<LaserMessage>(&*message);
-    if (laser == nullptr || laser->type != "FLASER") continue;
-    laser->scan.stamp = static_cast<double>(reference.size());
-    reference.push_back(laser->scan.stamp, laser->odom_pose);
-    slam.add_scan(laser->scan, HectorInputs{.T_odom_robot = laser->odom_pose});
-  }
-  return absolute_trajectory_error(slam.trajectory(), reference).rmse;
+  for (const LaserMessage& laser : campus.scans) slam.add_scan(laser.scan, HectorInputs{.T_odom_robot = laser.odom_pose});
+  return absolute_trajectory_error(slam.trajectory(), campus.reference).rmse;
 }
 
 TEST(HectorRealDataTracker, TheWeighedPriorsRetryKeepsFreiburgCampussExactOdometry) {

@@ -38,6 +38,19 @@ std::vector<LaserMessage> laser_messages(std::vector<SensorMessage> messages) {
   return scans;
 }
 
+CorrectedScans read_corrected_flaser(const std::filesystem::path& log) {
+  CorrectedScans result;
+  CarmenReader reader(log.string());
+  while (auto message = reader.next()) {
+    auto* laser = std::get_if<LaserMessage>(&*message);
+    if (laser == nullptr || laser->type != "FLASER") continue;
+    laser->scan.stamp = static_cast<double>(result.reference.size());
+    result.reference.push_back(laser->scan.stamp, laser->odom_pose);
+    result.scans.push_back(std::move(*laser));
+  }
+  return result;
+}
+
 std::vector<Relation> relations_at_most(std::vector<Relation> relations, double seconds) {
   std::erase_if(relations, [seconds](const Relation& r) { return !(std::abs(r.stamp_to - r.stamp_from) <= seconds); });
   return relations;

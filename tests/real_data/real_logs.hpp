@@ -10,6 +10,7 @@
 
 #include "slam2d/core/relation.hpp"
 #include "slam2d/core/sensor_log.hpp"
+#include "slam2d/core/trajectory.hpp"
 #include "slam2d/io/carmen.hpp"
 
 namespace slam2d::test {
@@ -27,6 +28,15 @@ std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log
 
 /// The laser messages, in order, moved out of `messages`.
 std::vector<LaserMessage> laser_messages(std::vector<SensorMessage> messages);
+
+/// A SLAM-corrected log's FLASER scans (their odometry is the corrected trajectory itself), each
+/// stamped by its index as the robustness benchmark does (Freiburg campus's stamps do not
+/// increase), and that trajectory as the reference.
+struct CorrectedScans {
+  std::vector<LaserMessage> scans;
+  Trajectory reference;
+};
+CorrectedScans read_corrected_flaser(const std::filesystem::path& log);
 
 /// The relations whose two stamps are at most `seconds` apart (|stamp_to - stamp_from| <= seconds), in order.
 std::vector<Relation> relations_at_most(std::vector<Relation> relations, double seconds);
