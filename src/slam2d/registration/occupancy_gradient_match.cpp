@@ -55,7 +55,7 @@ double prior_distance(const SE2& T_map_robot, const PosePrior& prior) {
 
 void add_pose_prior(NormalEquations<3>& equations, const SE2& T_map_robot, const PosePrior& prior) {
   const Eigen::Vector3d r = prior_residual(T_map_robot, prior);
-  const double distance = std::sqrt(r.dot(prior.information * r));  // Mahalanobis
+  const double distance = prior_distance(T_map_robot, prior);
   const double weight = prior.kernel.weight(distance);
   equations.H += weight * prior.information;  // J = I
   equations.b += weight * prior.information * r;

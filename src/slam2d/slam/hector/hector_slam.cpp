@@ -180,9 +180,9 @@ MatchResult HectorSlam::match_from(const std::vector<Eigen::Vector2d>& points, c
   if (mean_squared_residual(result) > recovery_residual(with_odometry)) {
     HectorMatcherConfig wide = matcher;
     wide.rotation_search_range = with_odometry ? kRetryRangeWithOdometry : std::numbers::pi;
-    // A heading the odometry lost: kCompetingStartAdvantage judges it; against a trusted increment
-    // the turned fit must also explain the scan, as a rotated start must (may_overrule).
-    if (!with_odometry) wide.rotation_search_min_explained = 0.0;
+    // A heading the odometry lost: kCompetingStartAdvantage judges it; against the prior of a
+    // trusted increment the turned fit must also explain the scan, as any rotated start must
+    // (may_overrule; without odometry there is no prior and no such test).
     MatchResult retry = match_scan_to_pyramid(map_, points, start, wide, prior);
     if (retry.cost < kCompetingStartAdvantage * result.cost) result = std::move(retry);
   }
