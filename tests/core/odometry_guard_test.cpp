@@ -201,6 +201,40 @@ TEST(OdometryGuard, TheIncrementAfterAGapMayCarryTheGapsMotion) {
   EXPECT_EQ(no_gap.check(0.36, SE2(0.38, 0.0, 1.45)).fault, OdometryFault::kJump);
 }
 
+// Intel with its odometry 0.6 s ahead, compensated: across a 2.4 s pause in the stamps (really one
+// scan's time: the robot turned 0.1 rad) the odometry, interpolated along the stamps, turns 1.3 rad.
+// An increment that moved over a gap that is also a pause in the log's rhythm stays trusted but is
+// to be confirmed by the scans; one that did not move, or one over the log's own rhythm (a scan
+// every 1.5 s, as in the SLAM-corrected logs), is not.
+TEST(OdometryGuard, AnIncrementThatMovedOverAPauseIsToBeConfirmed) {
+  const auto drive = [](OdometryGuard& guard, double period, int scans) {
+    for (int k = 0; k < scans; ++k) EXPECT_FALSE(guard.check(period * k, SE2(0.1 * k, 0.0, 0.02 * k)).confirm) << k;
+    return period * (scans - 1);
+  };
+  OdometryGuard guard;
+  double stamp = drive(guard, 0.2, 10);
+  const OdometryCheck turned = guard.check(stamp += 2.4, SE2(1.0, 0.0, 1.5));
+  EXPECT_TRUE(turned.gap);
+  EXPECT_TRUE(turned.trusted());
+  EXPECT_TRUE(turned.confirm);
+  const OdometryCheck rested = guard.check(stamp += 2.4, SE2(1.0, 0.0, 1.5));  // a pause, no motion
+  EXPECT_TRUE(rested.gap);
+  EXPECT_FALSE(rested.confirm);
+  EXPECT_EQ(guard.stats().gap_confirmations, 1u);
+
+  OdometryGuard slow;
+  stamp = drive(slow, 1.5, 10);
+  const OdometryCheck step = slow.check(stamp + 1.6, SE2(1.2, 0.0, 0.5));
+  EXPECT_TRUE(step.gap);
+  EXPECT_FALSE(step.confirm);
+
+  OdometryGuardConfig off;
+  off.confirm_pause = 0.0;
+  OdometryGuard unconfirmed(off);
+  stamp = drive(unconfirmed, 0.2, 10);
+  EXPECT_FALSE(unconfirmed.check(stamp + 2.4, SE2(1.0, 0.0, 1.5)).confirm);
+}
+
 TEST(OdometryGuard, ShortOrBackwardTimeStepsDoNotShrinkTheBound) {
   OdometryGuard guard;
   guard.check(10.0, SE2());

@@ -5,6 +5,9 @@
 #include <utility>
 #include <variant>
 
+#include "slam2d/core/error.hpp"
+#include "slam2d/core/odometry_chain.hpp"
+#include "slam2d/registration/odometry_time_offset.hpp"
 #include "slam2d/sim/fault_injection.hpp"
 
 namespace slam2d::test {
@@ -19,6 +22,15 @@ std::vector<SensorMessage> read_log(const std::filesystem::path& log, const Carm
 std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log, const std::string& fault,
                                                std::uint64_t seed) {
   return read_log_with_faults(log, {fault}, seed);
+}
+
+std::vector<SensorMessage> read_log_out_of_step(const std::filesystem::path& log, double by, double& estimate) {
+  std::vector<SensorMessage> messages = read_log_with_fault(log, "odom-shift:by=" + std::to_string(by));
+  const OdometryTimeOffset offset = estimate_odometry_time_offset(messages);
+  if (!offset.estimated) throw Error(log.string() + ": the odometry's time offset was not estimated: " + offset.reason);
+  estimate = offset.offset;
+  shift_scan_odometry(messages, -offset.offset);
+  return messages;
 }
 
 std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log, const std::vector<std::string>& faults,

@@ -30,6 +30,8 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
     const bool restarted = at_origin(T_odom_robot) && !at_origin(*last_pose_);
     if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood, restarted);
+    result.confirm = config_.enabled && pauses(result.dt, result.gap) && result.trusted() && is_moving(result.increment);
+    stats_.gap_confirmations += result.confirm ? 1 : 0;
     result.stall_start = stats_.stalls > stalls;
     result.hold_map = result.fault == OdometryFault::kStall && stood <= config_.max_held_stall;
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
@@ -49,13 +51,37 @@ bool OdometryGuard::is_frozen(const SE2& increment) const {
          std::abs(increment.theta()) <= config_.frozen_rotation;
 }
 
+// A gap that is also a pause in the log's rhythm: more than confirm_pause times the median of the
+// last step_history time steps (a log that scans every two seconds has no pause there). Every
+// positive step joins that history, after the test.
+bool OdometryGuard::pauses(double dt, bool gap) {
+  bool longer = false;
+  if (gap && config_.confirm_pause > 0.0 && time_steps_.size() >= config_.min_step_history) {
+    std::vector<double> steps = time_steps_;
+    const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), middle, steps.end());
+    longer = dt > config_.confirm_pause * *middle;
+  }
+  if (dt > 0.0) {
+    if (time_steps_.size() < config_.step_history) {
+      time_steps_.push_back(dt);
+    } else {
+      time_steps_[time_steps_seen_ % config_.step_history] = dt;
+    }
+    ++time_steps_seen_;
+  }
+  return longer;
+}
+
+bool OdometryGuard::is_moving(const SE2& increment) const {
+  return increment.translation().norm() > config_.moving_translation || std::abs(increment.theta()) > config_.moving_rotation;
+}
+
 // The state machine of the header: stall (frozen after motion) until the pose moves; a catch-up
 // when it moves after a stall, or after a rest of stall_duration or more by more than a robot
 // driving off could (it may have moved unseen); a jump when it restarted onto the origin or is
 // out of bounds.
 OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood, bool restarted) {
-  const double translation = increment.translation().norm();
-  const double rotation = std::abs(increment.theta());
   if (is_frozen(increment)) {
     // At rest "no motion" is true; and a pose repeated over less than stall_duration may be an
     // odometry slower than the scanner.
@@ -65,7 +91,7 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     ++stats_.stalled_scans;
     return OdometryFault::kStall;
   }
-  const bool moving = translation > config_.moving_translation || rotation > config_.moving_rotation;
+  const bool moving = is_moving(increment);
   const bool catch_up = stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt));
   if (restarted || (catch_up && exceeds_bounds(increment, stood + dt))) {
     // Onto the origin itself, or more than the robot could have moved since the pose last

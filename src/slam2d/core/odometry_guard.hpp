@@ -59,10 +59,20 @@
 //    gap may lag (ACES: the robot turns 1.4 rad during a 3 s gap, the scan after it shows 0.39 rad
 //    and the next increment the other 1.06 rad within 0.16 s), so the increment after a gap is
 //    bounded over the gap's time too.
+//  - confirm: a trusted increment that moved over a gap that is also a pause in the log's rhythm
+//    (more than confirm_pause times the median of the last step_history time steps; a log that
+//    scans every two seconds has no pause there). Over a pause the odometry at the scan may lag,
+//    and an odometry moved in time along the stamps (a compensated clock offset) is interpolated
+//    across it: Intel's logger stamped scans as it read them, so a 2.4 s pause is followed by a
+//    burst of scans 1 ms apart taken during it, and its odometry 0.6 s ahead put the burst's 1.3 rad
+//    on the scan after the pause, where the robot had turned 0.1 rad. The method matches the scan
+//    from the last pose too, which wins with a fit a fifth better (kCompetingStartAdvantage); then
+//    it sets OdometryCheck::refuted, and the increment is trusted no more.
 // A stalled, caught-up or jumped increment is not trusted: the method predicts that scan from the
 // last pose it trusts and its own motion estimate (each method's docs say how), and the
 // odometry is trusted again from the next good increment on. Counts go to summary.json as
-// odometry_stalls, odometry_stalled_scans, odometry_catch_ups, odometry_jumps, odometry_gaps.
+// odometry_stalls, odometry_stalled_scans, odometry_catch_ups, odometry_jumps, odometry_gaps,
+// odometry_gap_confirmations, odometry_gap_refutations.
 //
 // Defaults: the bounds sit above every increment of the three public logs (Intel, ACES, FR079:
 // at most 0.38 m and 1.06 rad between scans, 0.14 m and 0.33 rad at the 99.9th percentile) and
@@ -106,6 +116,8 @@ struct OdometryGuardConfig {
   double step_factor = 4.0;
   std::size_t step_history = 50;
   std::size_t min_step_history = 3;
+  // An increment over a gap that is also a pause in the log's rhythm (OdometryCheck::confirm).
+  double confirm_pause = 3.0;
 };
 
 template <typename Fields>
@@ -140,6 +152,9 @@ void describe(Fields& f, OdometryGuardConfig& c) {
   f.number("step_history", c.step_history, "1", at_least(1), "moving increments that percentile is taken over");
   f.number("min_step_history", c.min_step_history, "1", at_least(1),
            "moving increments needed before the step test applies (<= step_history)");
+  f.number("confirm_pause", c.confirm_pause, "1", at_least(0),
+           "an increment that moved over a gap longer than this times the median time step is confirmed by the "
+           "scans against the last pose (0: none)");
 }
 
 /// Throws Error for out-of-range values.
@@ -163,7 +178,9 @@ struct OdometryCheck {
   bool stall_start = false;             // the first increment of a stall
   bool moved = false;                   // the pose changed (or the first scan): a later catch-up starts here
   bool hold_map = false;                // a stall within max_held_stall: write no map at this scan, wait for the catch-up
-  bool trusted() const { return fault == OdometryFault::kNone; }
+  bool confirm = false;                 // trusted, moved over a pause: the scans confirm it against the last pose
+  bool refuted = false;                 // set by the method: the scans refuted it (the last pose won)
+  bool trusted() const { return fault == OdometryFault::kNone && !refuted; }
 };
 
 struct OdometryGuardStats {
@@ -175,6 +192,8 @@ struct OdometryGuardStats {
   std::size_t gaps = 0;
   std::size_t speedless = 0;       // increments beyond the speed bounds that the stamps could not judge
                                    // (dt <= 0) or that stood within the log's own steps
+  std::size_t gap_confirmations = 0;  // OdometryCheck::confirm
+  std::size_t gap_refutations = 0;    // of those, the ones the method's match refuted (count_refutation)
   std::size_t untrusted() const { return stalled_scans + catch_ups + jumps; }
 };
 
@@ -186,12 +205,16 @@ class OdometryGuard {
   OdometryCheck check(double stamp, const SE2& T_odom_robot);
 
   const OdometryGuardStats& stats() const { return stats_; }
+  /// The method's match refuted the increment it was asked to confirm (OdometryCheck::refuted).
+  void count_refutation() { ++stats_.gap_refutations; }
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
   OdometryFault classify(const SE2& increment, double dt, double stood, bool restarted);
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
+  bool is_moving(const SE2& increment) const;
+  bool pauses(double dt, bool gap);
   bool exceeds_startup(const SE2& increment, double dt) const;
   bool exceeds_bounds(const SE2& increment, double dt);
   bool beyond_steps(double value, std::vector<double> steps) const;
@@ -207,6 +230,8 @@ class OdometryGuard {
   std::vector<double> step_translations_;  // m, the last step_history moving increments (a ring)
   std::vector<double> step_rotations_;     // rad, their |rotation|
   std::size_t steps_seen_ = 0;
+  std::vector<double> time_steps_;  // s, the last step_history positive time steps (a ring)
+  std::size_t time_steps_seen_ = 0;
   OdometryGuardStats stats_;
 };
 

@@ -247,7 +247,8 @@ class HectorSlam {
   }
 
  private:
-  MatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
+  /// Sets `refuted` when an increment to be confirmed lost to the last pose (OdometryCheck::confirm).
+  MatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction, bool& refuted) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
     std::optional<SE2> second;   // the competing start, if any (kCompetingStartAdvantage)
