@@ -191,10 +191,9 @@ TEST(GraphSlamRealData, TakesBackAnOdometrySlipInOneStepAtOneHertz) {
 TEST(GraphSlamRealData, IsNotTurnedAroundWhereItsOdometryIsOutOfStepInTime) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());
-  double estimate = 0.0;
-  const std::vector<LaserMessage> scans =
-      test::laser_messages(test::read_log_out_of_step(data / "intel/intel.clf.gz", 0.6, estimate));
-  EXPECT_NEAR(estimate, 0.6, 0.05);
+  const test::ScansOutOfStep out_of_step = test::read_scans_out_of_step(data / "intel/intel.clf.gz", 0.6);
+  EXPECT_NEAR(out_of_step.estimate, 0.6, 0.05);
+  const std::vector<LaserMessage>& scans = out_of_step.scans;
   const auto error = [&](const GraphSlamConfig& config) {
     GraphSlam slam(config);
     for (const LaserMessage& laser : scans) slam.add_scan(laser.scan, laser.odom_pose);

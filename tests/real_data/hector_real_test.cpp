@@ -198,9 +198,7 @@ TEST(HectorRealDataTracker, TheWeighedPriorsRetryTakesBackAnOdometrySlipAtOneHer
 TEST(HectorRealData, ConfirmsAnIncrementOverAGapWhereItsOdometryIsOutOfStepInTime) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());
-  double estimate = 0.0;
-  const std::vector<LaserMessage> scans =
-      test::laser_messages(test::read_log_out_of_step(data / "intel/intel.clf.gz", 0.6, estimate));
+  const std::vector<LaserMessage> scans = test::read_scans_out_of_step(data / "intel/intel.clf.gz", 0.6).scans;
   const auto error = [&](bool confirm) {
     HectorSlamConfig config;
     config.odometry_guard.confirm_pause = confirm ? OdometryGuardConfig{}.confirm_pause : 0.0;

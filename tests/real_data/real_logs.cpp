@@ -24,13 +24,12 @@ std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log,
   return read_log_with_faults(log, {fault}, seed);
 }
 
-std::vector<SensorMessage> read_log_out_of_step(const std::filesystem::path& log, double by, double& estimate) {
+ScansOutOfStep read_scans_out_of_step(const std::filesystem::path& log, double by) {
   std::vector<SensorMessage> messages = read_log_with_fault(log, "odom-shift:by=" + std::to_string(by));
   const OdometryTimeOffset offset = estimate_odometry_time_offset(messages);
   if (!offset.estimated) throw Error(log.string() + ": the odometry's time offset was not estimated: " + offset.reason);
-  estimate = offset.offset;
   shift_scan_odometry(messages, -offset.offset);
-  return messages;
+  return {laser_messages(std::move(messages)), offset.offset};
 }
 
 std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log, const std::vector<std::string>& faults,

@@ -26,10 +26,14 @@ std::vector<SensorMessage> read_log_with_fault(const std::filesystem::path& log,
 std::vector<SensorMessage> read_log_with_faults(const std::filesystem::path& log, const std::vector<std::string>& faults,
                                                 std::uint64_t seed = 1);
 
-/// The log with its odometry moved `by` s ahead of the laser (`odom-shift:by=BY`), that offset
-/// estimated from the data and compensated, as `slam2d map` does with --odometry-time-offset auto;
-/// the estimate in `estimate`.
-std::vector<SensorMessage> read_log_out_of_step(const std::filesystem::path& log, double by, double& estimate);
+/// The log's scans with its odometry moved `by` s ahead of the laser (`odom-shift:by=BY`), that
+/// offset estimated from the data and compensated, as `slam2d map` does with
+/// --odometry-time-offset auto.
+struct ScansOutOfStep {
+  std::vector<LaserMessage> scans;
+  double estimate = 0.0;  // s, the offset estimated
+};
+ScansOutOfStep read_scans_out_of_step(const std::filesystem::path& log, double by);
 
 /// The laser messages, in order, moved out of `messages`.
 std::vector<LaserMessage> laser_messages(std::vector<SensorMessage> messages);

@@ -8,6 +8,19 @@
 
 namespace slam2d {
 
+namespace {
+
+// Writes `value` into a ring of the last `capacity` values, `seen` values having been written.
+void put(std::vector<double>& ring, std::size_t seen, std::size_t capacity, double value) {
+  if (ring.size() < capacity) {
+    ring.push_back(value);
+  } else {
+    ring[seen % capacity] = value;
+  }
+}
+
+}  // namespace
+
 void validate(const OdometryGuardConfig& config) {
   check_fields(config, "OdometryGuardConfig");
   check(config.max_startup_time >= config.min_time_step, "OdometryGuardConfig: max_startup_time must be >= min_time_step");
@@ -62,14 +75,7 @@ bool OdometryGuard::pauses(double dt, bool gap) {
     std::nth_element(steps.begin(), middle, steps.end());
     longer = dt > config_.confirm_pause * *middle;
   }
-  if (dt > 0.0) {
-    if (time_steps_.size() < config_.step_history) {
-      time_steps_.push_back(dt);
-    } else {
-      time_steps_[time_steps_seen_ % config_.step_history] = dt;
-    }
-    ++time_steps_seen_;
-  }
+  if (dt > 0.0) put(time_steps_, time_steps_seen_++, config_.step_history, dt);
   return longer;
 }
 
@@ -155,14 +161,9 @@ bool OdometryGuard::beyond_steps(double value, std::vector<double> steps) const 
 }
 
 void OdometryGuard::remember_step(const SE2& increment) {
-  const std::size_t slot = steps_seen_++ % config_.step_history;
-  if (step_translations_.size() < config_.step_history) {
-    step_translations_.push_back(increment.translation().norm());
-    step_rotations_.push_back(std::abs(increment.theta()));
-  } else {
-    step_translations_[slot] = increment.translation().norm();
-    step_rotations_[slot] = std::abs(increment.theta());
-  }
+  put(step_translations_, steps_seen_, config_.step_history, increment.translation().norm());
+  put(step_rotations_, steps_seen_, config_.step_history, std::abs(increment.theta()));
+  ++steps_seen_;
 }
 
 }  // namespace slam2d

@@ -94,7 +94,9 @@ HectorStep HectorSlam::add_scan(const LaserScan& scan, const HectorInputs& input
     corrected = correct_rotational_distortion(scan, angular_rate(scan, inputs, step.prediction), config_.sweep_duration);
   }
   if (last_pose_ && !map_empty_) {  // Sec. IV-B/C: match against the map built so far
-    step.match = match(corrected, inputs, step.prediction, odometry_.refuted);
+    ScanMatch matched = match(corrected, inputs, step.prediction);
+    step.match = std::move(matched.result);
+    odometry_.refuted = matched.refuted;
     if (odometry_.refuted) odometry_guard_.count_refutation();
     step.odometry = odometry_;
     step.matched = true;
@@ -157,12 +159,12 @@ void HectorSlam::fuse(HectorStep& step) {
   step.covariance = fused.covariance;
 }
 
-MatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction,
-                              bool& refuted) const {
+HectorSlam::ScanMatch HectorSlam::match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const {
   std::vector<Eigen::Vector2d> points = usable_end_points(corrected, config_.min_range, config_.max_range);
   if (inputs.attitude) points = project_to_horizontal(points, *inputs.attitude);
   const bool with_odometry = odometry_trusted();
-  MatchResult result = match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt);
+  ScanMatch matched{match_from(points, prediction, with_odometry, with_odometry ? pose_prior(prediction) : std::nullopt)};
+  MatchResult& result = matched.result;
   if (const std::optional<UntrustedStarts> starts = untrusted_starts(); starts && starts->second) {
     MatchResult second = match_from(points, *starts->second, false, std::nullopt);
     if (second.cost < kCompetingStartAdvantage * result.cost) result = std::move(second);
@@ -175,11 +177,11 @@ MatchResult HectorSlam::match(const LaserScan& corrected, const HectorInputs& in
     // the scan than the prediction's fit.
     MatchResult second = match_scan_to_pyramid(map_, points, *last_pose_, config_.matcher, pose_prior(prediction));
     const OccupancyGrid& finest = map_.level(0);
-    refuted = second.cost < kCompetingStartAdvantage * result.cost &&
-              explained_share(finest, points, second.T_target_source) > explained_share(finest, points, result.T_target_source);
-    if (refuted) result = std::move(second);  // then the match stands alone (fuse)
+    matched.refuted = second.cost < kCompetingStartAdvantage * result.cost &&
+                      explained_share(finest, points, second.T_target_source) > explained_share(finest, points, result.T_target_source);
+    if (matched.refuted) result = std::move(second);  // then the match stands alone (fuse)
   }
-  return result;
+  return matched;
 }
 
 // Gauss-Newton on the pyramid from `start`, with the odometry settings or those without, and

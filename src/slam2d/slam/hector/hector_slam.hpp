@@ -247,8 +247,11 @@ class HectorSlam {
   }
 
  private:
-  /// Sets `refuted` when an increment to be confirmed lost to the last pose (OdometryCheck::confirm).
-  MatchResult match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction, bool& refuted) const;
+  struct ScanMatch {
+    MatchResult result;
+    bool refuted = false;  // an increment to be confirmed lost to the last pose (OdometryCheck::confirm)
+  };
+  ScanMatch match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction
     std::optional<SE2> second;   // the competing start, if any (kCompetingStartAdvantage)
