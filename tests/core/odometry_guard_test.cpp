@@ -203,9 +203,9 @@ TEST(OdometryGuard, TheIncrementAfterAGapMayCarryTheGapsMotion) {
 
 // Intel with its odometry 0.6 s ahead, compensated: across a 2.4 s pause in the stamps (really one
 // scan's time: the robot turned 0.1 rad) the odometry, interpolated along the stamps, turns 1.3 rad.
-// An increment that moved over a gap that is also a pause in the log's rhythm stays trusted but is
-// to be confirmed by the scans; one that did not move, or one over the log's own rhythm (a scan
-// every 1.5 s, as in the SLAM-corrected logs), is not.
+// An increment that moved over a pause in the log's rhythm (shorter than a gap too) stays trusted
+// but is to be confirmed by the scans; one that did not move, or one over the log's own rhythm (a
+// scan every 1.5 s, as in the SLAM-corrected logs), is not.
 TEST(OdometryGuard, AnIncrementThatMovedOverAPauseIsToBeConfirmed) {
   const auto drive = [](OdometryGuard& guard, double period, int scans) {
     for (int k = 0; k < scans; ++k) EXPECT_FALSE(guard.check(period * k, SE2(0.1 * k, 0.0, 0.02 * k)).confirm) << k;
@@ -220,7 +220,14 @@ TEST(OdometryGuard, AnIncrementThatMovedOverAPauseIsToBeConfirmed) {
   const OdometryCheck rested = guard.check(stamp += 2.4, SE2(1.0, 0.0, 1.5));  // a pause, no motion
   EXPECT_TRUE(rested.gap);
   EXPECT_FALSE(rested.confirm);
-  EXPECT_EQ(guard.stats().gap_confirmations, 1u);
+  EXPECT_EQ(guard.stats().pause_confirmations, 1u);
+
+  OdometryGuard fast;  // a scan every 0.1 s, then one after 0.8 s: no gap, but a pause
+  stamp = drive(fast, 0.1, 20);
+  const OdometryCheck short_pause = fast.check(stamp + 0.8, SE2(2.5, 0.0, 1.0));
+  EXPECT_FALSE(short_pause.gap);
+  EXPECT_TRUE(short_pause.confirm);
+  EXPECT_FALSE(fast.check(stamp + 0.8 + 0.3, SE2(2.6, 0.0, 1.02)).confirm) << "three steps of the rhythm";
 
   OdometryGuard slow;
   stamp = drive(slow, 1.5, 10);

@@ -186,8 +186,8 @@ TEST(GraphSlamRealData, TakesBackAnOdometrySlipInOneStepAtOneHertz) {
 // pause (at t = 2429 s: 1.3 rad where the robot turned 0.1). The tracker's match from there fit
 // poorly, and its retry over every heading found the mirror heading of a corridor (0.92 m over all
 // relations, 180 deg off); a trusted increment's retry turns a quarter turn at most (0.072 m with
-// `slam2d map`), and an increment over a gap is confirmed against the last pose
-// (OdometryCheck::confirm: 0.021 m; the clean log 0.020 m).
+// `slam2d map`), and an increment over a pause is confirmed against the last pose
+// (OdometryCheck::confirm: 0.020 m; the clean log 0.020 m).
 TEST(GraphSlamRealData, IsNotTurnedAroundWhereItsOdometryIsOutOfStepInTime) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<Relation> relations = read_relations((data / "intel/intel.relations").string());

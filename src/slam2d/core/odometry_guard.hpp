@@ -59,20 +59,22 @@
 //    gap may lag (ACES: the robot turns 1.4 rad during a 3 s gap, the scan after it shows 0.39 rad
 //    and the next increment the other 1.06 rad within 0.16 s), so the increment after a gap is
 //    bounded over the gap's time too.
-//  - confirm: a trusted increment that moved over a gap that is also a pause in the log's rhythm
-//    (more than confirm_pause times the median of the last step_history time steps; a log that
-//    scans every two seconds has no pause there). Over a pause the odometry at the scan may lag,
-//    and an odometry moved in time along the stamps (a compensated clock offset) is interpolated
-//    across it: Intel's logger stamped scans as it read them, so a 2.4 s pause is followed by a
-//    burst of scans 1 ms apart taken during it, and its odometry 0.6 s ahead put the burst's 1.3 rad
-//    on the scan after the pause, where the robot had turned 0.1 rad. The method matches the scan
-//    from the last pose too, which wins with a fit a fifth better (kCompetingStartAdvantage); then
-//    it sets OdometryCheck::refuted, and the increment is trusted no more.
+//  - confirm: a trusted increment that moved over a pause in the log's rhythm: a time step more
+//    than confirm_pause times the median of the last step_history ones, whether or not it is a
+//    gap (a log that scans every two seconds has no pause at two seconds, one that scans every
+//    0.1 s has one at 0.8 s). Over a pause the odometry at the scan may lag, and an odometry moved
+//    in time along the stamps (a compensated clock offset) is interpolated across it: Intel's
+//    logger stamped scans as it read them, so a 2.4 s pause is followed by a burst of scans 1 ms
+//    apart taken during it, and its odometry 0.6 s ahead put the burst's 1.3 rad on the scan after
+//    the pause, where the robot had turned 0.1 rad; shorter pauses (0.8 s, below the gap) did the
+//    same with turns of 0.5-0.8 rad. The method matches the scan from the last pose too, which
+//    wins with a fit a fifth better (kCompetingStartAdvantage); then it sets
+//    OdometryCheck::refuted, and the increment is trusted no more.
 // A stalled, caught-up or jumped increment is not trusted: the method predicts that scan from the
 // last pose it trusts and its own motion estimate (each method's docs say how), and the
 // odometry is trusted again from the next good increment on. Counts go to summary.json as
 // odometry_stalls, odometry_stalled_scans, odometry_catch_ups, odometry_jumps, odometry_gaps,
-// odometry_gap_confirmations, odometry_gap_refutations.
+// odometry_pause_confirmations, odometry_pause_refutations.
 //
 // Defaults: the bounds sit above every increment of the three public logs (Intel, ACES, FR079:
 // at most 0.38 m and 1.06 rad between scans, 0.14 m and 0.33 rad at the 99.9th percentile) and
@@ -116,8 +118,8 @@ struct OdometryGuardConfig {
   double step_factor = 4.0;
   std::size_t step_history = 50;
   std::size_t min_step_history = 3;
-  // An increment over a gap that is also a pause in the log's rhythm (OdometryCheck::confirm).
-  double confirm_pause = 3.0;
+  // An increment over a pause in the log's rhythm (OdometryCheck::confirm).
+  double confirm_pause = 5.0;
 };
 
 template <typename Fields>
@@ -153,7 +155,7 @@ void describe(Fields& f, OdometryGuardConfig& c) {
   f.number("min_step_history", c.min_step_history, "1", at_least(1),
            "moving increments needed before the step test applies (<= step_history)");
   f.number("confirm_pause", c.confirm_pause, "1", at_least(0),
-           "an increment that moved over a gap longer than this times the median time step is confirmed by the "
+           "an increment that moved over a time step longer than this times the median one is confirmed by the "
            "scans against the last pose (0: none)");
 }
 
@@ -192,8 +194,8 @@ struct OdometryGuardStats {
   std::size_t gaps = 0;
   std::size_t speedless = 0;       // increments beyond the speed bounds that the stamps could not judge
                                    // (dt <= 0) or that stood within the log's own steps
-  std::size_t gap_confirmations = 0;  // OdometryCheck::confirm
-  std::size_t gap_refutations = 0;    // of those, the ones the method's match refuted (count_refutation)
+  std::size_t pause_confirmations = 0;  // OdometryCheck::confirm
+  std::size_t pause_refutations = 0;    // of those, the ones the method's match refuted (count_refutation)
   std::size_t untrusted() const { return stalled_scans + catch_ups + jumps; }
 };
 
@@ -206,7 +208,7 @@ class OdometryGuard {
 
   const OdometryGuardStats& stats() const { return stats_; }
   /// The method's match refuted the increment it was asked to confirm (OdometryCheck::refuted).
-  void count_refutation() { ++stats_.gap_refutations; }
+  void count_refutation() { ++stats_.pause_refutations; }
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
@@ -214,7 +216,7 @@ class OdometryGuard {
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool is_moving(const SE2& increment) const;
-  bool pauses(double dt, bool gap);
+  bool pauses(double dt);
   bool exceeds_startup(const SE2& increment, double dt) const;
   bool exceeds_bounds(const SE2& increment, double dt);
   bool beyond_steps(double value, std::vector<double> steps) const;

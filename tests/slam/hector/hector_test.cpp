@@ -374,7 +374,7 @@ TEST(HectorSlam, ATrustedOdometryIsNotTurnedAroundByTheMirrorOfASymmetricRoom) {
 // The increment over the gap is trusted (the robot could have turned so in 2.4 s), but confirmed
 // against the last pose (OdometryCheck::confirm), which wins with its much better fit; without the
 // confirmation the match from the turned prediction ends in a heading far off.
-TEST(HectorSlam, AnIncrementOverAGapIsConfirmedByTheScans) {
+TEST(HectorSlam, AnIncrementOverAPauseIsConfirmedByTheScans) {
   const SimulatedRun& run = office_run();
   const auto scans = laser_messages(run);
   constexpr std::size_t kBurst = 10;
@@ -410,8 +410,8 @@ TEST(HectorSlam, AnIncrementOverAGapIsConfirmedByTheScans) {
     std::cout << "[ measured ] confirm " << confirm << ": ATE " << ate.rmse << " m, worst heading " << worst_heading
               << " rad, gap at scan " << gap << "\n";
     if (confirm) {
-      EXPECT_EQ(slam.odometry_stats().gap_confirmations, 1u);
-      EXPECT_EQ(slam.odometry_stats().gap_refutations, 1u);
+      EXPECT_EQ(slam.odometry_stats().pause_confirmations, 1u);
+      EXPECT_EQ(slam.odometry_stats().pause_refutations, 1u);
       EXPECT_LT(worst_heading, 0.1);
       EXPECT_LT(ate.rmse, 0.1);
     } else {
