@@ -43,7 +43,8 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
     const bool restarted = at_origin(T_odom_robot) && !at_origin(*last_pose_);
     if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood, restarted);
-    result.confirm = config_.enabled && pauses(result.dt) && result.trusted() && is_moving(result.increment);
+    result.confirm = config_.enabled && result.trusted() && is_moving(result.increment) && pauses(result.dt);
+    remember_time_step(result.dt);
     stats_.pause_confirmations += result.confirm ? 1 : 0;
     result.stall_start = stats_.stalls > stalls;
     result.hold_map = result.fault == OdometryFault::kStall && stood <= config_.max_held_stall;
@@ -66,17 +67,18 @@ bool OdometryGuard::is_frozen(const SE2& increment) const {
 
 // A pause in the log's rhythm: a time step more than confirm_pause times the median of the last
 // step_history ones (a log that scans every two seconds has no pause at two seconds; one that
-// scans every 0.1 s has one at 0.8 s). Every positive step joins that history, after the test.
-bool OdometryGuard::pauses(double dt) {
-  bool longer = false;
-  if (config_.confirm_pause > 0.0 && time_steps_.size() >= config_.min_step_history) {
-    std::vector<double> steps = time_steps_;
-    const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-    std::nth_element(steps.begin(), middle, steps.end());
-    longer = dt > config_.confirm_pause * *middle;
-  }
+// scans every 0.1 s has one at 0.8 s). Asked only of an increment that could be confirmed.
+bool OdometryGuard::pauses(double dt) const {
+  if (config_.confirm_pause <= 0.0 || time_steps_.size() < config_.min_step_history) return false;
+  std::vector<double> steps = time_steps_;
+  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
+  return dt > config_.confirm_pause * *middle;
+}
+
+// Every positive time step joins the history, after the test.
+void OdometryGuard::remember_time_step(double dt) {
   if (dt > 0.0) put(time_steps_, time_steps_seen_++, config_.step_history, dt);
-  return longer;
 }
 
 bool OdometryGuard::is_moving(const SE2& increment) const {

@@ -216,7 +216,8 @@ class OdometryGuard {
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool is_moving(const SE2& increment) const;
-  bool pauses(double dt);
+  bool pauses(double dt) const;
+  void remember_time_step(double dt);
   bool exceeds_startup(const SE2& increment, double dt) const;
   bool exceeds_bounds(const SE2& increment, double dt);
   bool beyond_steps(double value, std::vector<double> steps) const;
