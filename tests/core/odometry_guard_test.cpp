@@ -242,6 +242,31 @@ TEST(OdometryGuard, AnIncrementThatMovedOverAPauseIsToBeConfirmed) {
   EXPECT_FALSE(unconfirmed.check(stamp + 2.4, SE2(1.0, 0.0, 1.5)).confirm);
 }
 
+// Intel's burst after a pause: scans 1 ms apart, taken during the pause, over which the odometry
+// (interpolated along the stamps) stands. A trusted increment that stood over a step shorter than
+// the median over confirm_burst is to be confirmed by the scans; one that moved, one over the log's
+// rhythm, one before the rhythm is known or with confirm_burst 0 is not.
+TEST(OdometryGuard, AnIncrementThatStoodWithinABurstIsToBeConfirmed) {
+  OdometryGuard guard({.confirm_burst = 5.0});
+  EXPECT_FALSE(guard.check(0.0, SE2()).burst);
+  EXPECT_FALSE(guard.check(0.001, SE2()).burst) << "no rhythm known yet";
+  double stamp = 0.001;
+  for (int k = 1; k <= 10; ++k) EXPECT_FALSE(guard.check(stamp += 0.1, SE2(0.1 * k, 0.0, 0.0)).burst) << k;
+  const OdometryCheck stood = guard.check(stamp += 0.001, SE2(1.0, 0.0, 0.0));
+  EXPECT_TRUE(stood.trusted());
+  EXPECT_TRUE(stood.burst);
+  EXPECT_FALSE(stood.confirm);
+  EXPECT_FALSE(guard.check(stamp += 0.001, SE2(1.1, 0.0, 0.0)).burst) << "it moved";
+  EXPECT_FALSE(guard.check(stamp += 0.03, SE2(1.1, 0.0, 0.0)).burst) << "a third of the rhythm";
+  EXPECT_TRUE(guard.check(stamp += 0.001, SE2(1.1, 0.0, 0.0)).burst);
+  EXPECT_EQ(guard.stats().burst_checks, 2u);
+
+  OdometryGuard unconfirmed;  // off by default
+  stamp = 0.0;
+  for (int k = 0; k <= 10; ++k) unconfirmed.check(stamp += 0.1, SE2(0.1 * k, 0.0, 0.0));
+  EXPECT_FALSE(unconfirmed.check(stamp += 0.001, SE2(1.0, 0.0, 0.0)).burst);
+}
+
 TEST(OdometryGuard, ShortOrBackwardTimeStepsDoNotShrinkTheBound) {
   OdometryGuard guard;
   guard.check(10.0, SE2());

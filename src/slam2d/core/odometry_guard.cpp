@@ -19,6 +19,13 @@ void put(std::vector<double>& ring, std::size_t seen, std::size_t capacity, doub
   }
 }
 
+// The value at `index` of `values` sorted (its own copy, partly sorted).
+double nth_value(std::vector<double> values, std::size_t index) {
+  const auto nth = values.begin() + static_cast<std::ptrdiff_t>(index);
+  std::nth_element(values.begin(), nth, values.end());
+  return *nth;
+}
+
 }  // namespace
 
 void validate(const OdometryGuardConfig& config) {
@@ -44,8 +51,10 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     const bool restarted = at_origin(T_odom_robot) && !at_origin(*last_pose_);
     if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood, restarted);
     result.confirm = config_.enabled && result.trusted() && is_moving(result.increment) && pauses(result.dt);
+    result.burst = config_.enabled && result.trusted() && !is_moving(result.increment) && bursts(result.dt);
     remember_time_step(result.dt);
     stats_.pause_confirmations += result.confirm ? 1 : 0;
+    stats_.burst_checks += result.burst ? 1 : 0;
     result.stall_start = stats_.stalls > stalls;
     result.hold_map = result.fault == OdometryFault::kStall && stood <= config_.max_held_stall;
     // After a gap the odometry pose of the next scan may lag (logged before the gap's motion was
@@ -65,15 +74,27 @@ bool OdometryGuard::is_frozen(const SE2& increment) const {
          std::abs(increment.theta()) <= config_.frozen_rotation;
 }
 
+// The median of the last step_history time steps; none while fewer than min_step_history are known.
+std::optional<double> OdometryGuard::median_time_step() const {
+  if (time_steps_.size() < config_.min_step_history) return std::nullopt;
+  return nth_value(time_steps_, time_steps_.size() / 2);
+}
+
 // A pause in the log's rhythm: a time step more than confirm_pause times the median of the last
 // step_history ones (a log that scans every two seconds has no pause at two seconds; one that
 // scans every 0.1 s has one at 0.8 s). Asked only of an increment that could be confirmed.
 bool OdometryGuard::pauses(double dt) const {
-  if (config_.confirm_pause <= 0.0 || time_steps_.size() < config_.min_step_history) return false;
-  std::vector<double> steps = time_steps_;
-  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), middle, steps.end());
-  return dt > config_.confirm_pause * *middle;
+  if (config_.confirm_pause <= 0.0) return false;
+  const std::optional<double> median = median_time_step();
+  return median && dt > config_.confirm_pause * *median;
+}
+
+// A burst in the log's rhythm: a time step less than the median over confirm_burst (scans stamped
+// as a logger read them after a pause, 1 ms apart). Asked only of an increment that stood.
+bool OdometryGuard::bursts(double dt) const {
+  if (config_.confirm_burst <= 0.0) return false;
+  const std::optional<double> median = median_time_step();
+  return median && dt * config_.confirm_burst < *median;
 }
 
 // Every positive time step joins the history, after the test.
@@ -155,11 +176,10 @@ bool OdometryGuard::exceeds_bounds(const SE2& increment, double dt) {
 
 // More than step_factor times the 90th percentile of the recent moving increments' `steps`; true
 // while too few are known (the speed bounds alone judge then).
-bool OdometryGuard::beyond_steps(double value, std::vector<double> steps) const {
+bool OdometryGuard::beyond_steps(double value, const std::vector<double>& steps) const {
   if (config_.step_factor <= 0.0 || steps.size() < config_.min_step_history) return true;
-  const auto p90 = steps.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(steps.size() - 1));
-  std::nth_element(steps.begin(), p90, steps.end());
-  return value > config_.step_factor * *p90;
+  const auto p90 = static_cast<std::size_t>(0.9 * static_cast<double>(steps.size() - 1));
+  return value > config_.step_factor * nth_value(steps, p90);
 }
 
 void OdometryGuard::remember_step(const SE2& increment) {

@@ -70,11 +70,18 @@
 //    same with turns of 0.5-0.8 rad. The method matches the scan from the last pose too, which
 //    wins with a fit a fifth better (kCompetingStartAdvantage); then it sets
 //    OdometryCheck::refuted, and the increment is trusted no more.
+//  - burst: a trusted increment that did not move over a time step shorter than the median over
+//    confirm_burst: a scan of a burst like Intel's, taken during the pause before it, where the
+//    odometry (logged at its own rate, or interpolated along the stamps) stands while the scans
+//    turn. The method matches the scan from the last estimated motion repeated too, and refutes
+//    the increment as above (Hector: HectorSlam::confirming_start; off, confirm_burst 0, by
+//    default and in every other method, graph SLAM's tracker included).
 // A stalled, caught-up or jumped increment is not trusted: the method predicts that scan from the
 // last pose it trusts and its own motion estimate (each method's docs say how), and the
 // odometry is trusted again from the next good increment on. Counts go to summary.json as
 // odometry_stalls, odometry_stalled_scans, odometry_catch_ups, odometry_jumps, odometry_gaps,
-// odometry_pause_confirmations, odometry_pause_refutations.
+// odometry_pause_confirmations, odometry_pause_refutations, odometry_burst_checks,
+// odometry_burst_refutations.
 //
 // Defaults: the bounds sit above every increment of the three public logs (Intel, ACES, FR079:
 // at most 0.38 m and 1.06 rad between scans, 0.14 m and 0.33 rad at the 99.9th percentile) and
@@ -120,6 +127,9 @@ struct OdometryGuardConfig {
   std::size_t min_step_history = 3;
   // An increment over a pause in the log's rhythm (OdometryCheck::confirm).
   double confirm_pause = 5.0;
+  // A standing increment within a burst of scans (OdometryCheck::burst); off but in Hector, the
+  // one method with a use for it (HectorSlamConfig).
+  double confirm_burst = 0.0;
 };
 
 template <typename Fields>
@@ -157,6 +167,9 @@ void describe(Fields& f, OdometryGuardConfig& c) {
   f.number("confirm_pause", c.confirm_pause, "1", at_least(0),
            "an increment that moved over a time step longer than this times the median one is confirmed by the "
            "scans against the last pose (0: none)");
+  f.number("confirm_burst", c.confirm_burst, "1", at_least(0),
+           "an increment that did not move over a time step shorter than the median one over this is confirmed by "
+           "the scans against the last motion repeated (0: none; Hector's matcher alone has a use for it)");
 }
 
 /// Throws Error for out-of-range values.
@@ -181,6 +194,7 @@ struct OdometryCheck {
   bool moved = false;                   // the pose changed (or the first scan): a later catch-up starts here
   bool hold_map = false;                // a stall within max_held_stall: write no map at this scan, wait for the catch-up
   bool confirm = false;                 // trusted, moved over a pause: the scans confirm it against the last pose
+  bool burst = false;                   // trusted, stood within a burst: the scans confirm it against the last motion
   bool refuted = false;                 // set by the method: the scans refuted it (the last pose won)
   bool trusted() const { return fault == OdometryFault::kNone && !refuted; }
 };
@@ -196,6 +210,8 @@ struct OdometryGuardStats {
                                    // (dt <= 0) or that stood within the log's own steps
   std::size_t pause_confirmations = 0;  // OdometryCheck::confirm
   std::size_t pause_refutations = 0;    // of those, the ones the method's match refuted (count_refutation)
+  std::size_t burst_checks = 0;         // OdometryCheck::burst
+  std::size_t burst_refutations = 0;    // of those, the ones the method's match refuted
   std::size_t untrusted() const { return stalled_scans + catch_ups + jumps; }
 };
 
@@ -207,8 +223,8 @@ class OdometryGuard {
   OdometryCheck check(double stamp, const SE2& T_odom_robot);
 
   const OdometryGuardStats& stats() const { return stats_; }
-  /// The method's match refuted the increment it was asked to confirm (OdometryCheck::refuted).
-  void count_refutation() { ++stats_.pause_refutations; }
+  /// The method's match refuted the increment `check` it was asked to confirm (OdometryCheck::refuted).
+  void count_refutation(const OdometryCheck& check) { ++(check.burst ? stats_.burst_refutations : stats_.pause_refutations); }
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
@@ -216,11 +232,13 @@ class OdometryGuard {
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool is_moving(const SE2& increment) const;
+  std::optional<double> median_time_step() const;
   bool pauses(double dt) const;
+  bool bursts(double dt) const;
   void remember_time_step(double dt);
   bool exceeds_startup(const SE2& increment, double dt) const;
   bool exceeds_bounds(const SE2& increment, double dt);
-  bool beyond_steps(double value, std::vector<double> steps) const;
+  bool beyond_steps(double value, const std::vector<double>& steps) const;
   void remember_step(const SE2& increment);
 
   OdometryGuardConfig config_;

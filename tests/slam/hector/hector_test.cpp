@@ -420,6 +420,68 @@ TEST(HectorSlam, AnIncrementOverAPauseIsConfirmedByTheScans) {
   }
 }
 
+// The other side of Intel's bursts: its scans, 1 ms apart, were taken during the pause before
+// them (here every fifth scan of the run: the robot drives more than 0.5 m over the burst), and the
+// odometry, 0.6 s ahead and interpolated along their stamps, stands from the scan after the pause
+// on, where it has already reached the burst's end (confirmed against the last pose as in the
+// test above). Each standing increment within the burst is trusted but confirmed against the last
+// motion repeated (OdometryCheck::burst), which follows the robot; without the confirmation the
+// prior holds the burst at the last pose and Hector loses its place.
+TEST(HectorSlam, AStandingIncrementWithinABurstIsConfirmedByTheScans) {
+  const SimulatedRun& run = office_run();
+  const auto scans = laser_messages(run);
+  constexpr std::size_t kBurst = 8;
+  constexpr std::size_t kEvery = 5;
+  const auto travel = [&](std::size_t k) {
+    return (scans[k + kEvery * kBurst]->odom_pose.translation() - scans[k]->odom_pose.translation()).norm();
+  };
+  std::size_t pause = 20;  // the scan after which the robot drives the farthest over a burst
+  for (std::size_t i = 20; i + kEvery * kBurst < scans.size(); ++i) {
+    if (travel(i) > travel(pause)) pause = i;
+  }
+  ASSERT_GT(travel(pause), 0.5);
+  std::vector<std::size_t> used;  // the run's scans in the log: the burst keeps every kEvery-th
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    if (i <= pause || i > pause + kEvery * kBurst || (i - pause) % kEvery == 0) used.push_back(i);
+  }
+  for (const bool confirm : {true, false}) {
+    HectorSlamConfig config;
+    if (!confirm) config.odometry_guard.confirm_burst = 0.0;
+    HectorSlam slam(config);
+    Trajectory truth;
+    for (const std::size_t i : used) {
+      LaserScan scan = scans[i]->scan;
+      SE2 odometry = scans[i]->odom_pose;
+      if (i >= pause && i <= pause + kEvery * kBurst) {  // the burst, stamped 1 ms apart after the pause
+        scan.stamp = scans[pause]->scan.stamp + 2.4 + 0.001 * static_cast<double>((i - pause) / kEvery);
+        odometry = scans[pause + kEvery * kBurst]->odom_pose;
+      } else if (i > pause) {
+        scan.stamp += 2.4 - (scans[pause + kEvery * kBurst]->scan.stamp - scans[pause]->scan.stamp);
+      }
+      slam.add_scan(scan, {.T_odom_robot = odometry});
+      truth.push_back(scan.stamp, run.truth[i].pose);
+    }
+    const AteResult ate = absolute_trajectory_error(slam.trajectory(), truth);
+    double worst = 0.0;  // m, the worst position in the burst
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      if (used[k] <= pause || used[k] > pause + kEvery * kBurst) continue;
+      const SE2 aligned = ate.T_reference_estimate * slam.trajectory()[k].pose;
+      worst = std::max(worst, (aligned.translation() - truth[k].pose.translation()).norm());
+    }
+    std::cout << "[ measured ] confirm " << confirm << ": ATE " << ate.rmse << " m, worst in the burst " << worst
+              << " m, burst checks " << slam.odometry_stats().burst_checks << ", refutations "
+              << slam.odometry_stats().burst_refutations << "\n";
+    if (confirm) {
+      EXPECT_EQ(slam.odometry_stats().burst_checks, kBurst);
+      EXPECT_GT(slam.odometry_stats().burst_refutations, kBurst / 2);
+      EXPECT_LT(worst, 0.05);
+      EXPECT_LT(ate.rmse, 0.1);
+    } else {
+      EXPECT_GT(worst, 0.1) << "the case no longer tests the confirmation";
+    }
+  }
+}
+
 // After a gap the odometry may be metres and a radian off (here every odometry pose after scan 150
 // is moved by 3 m and 1 rad): restart_map() places the next scan at its prediction without
 // matching it against the old map, and the scans after it are tracked against the new map alone.

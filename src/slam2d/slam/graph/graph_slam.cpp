@@ -47,6 +47,7 @@ HectorSlamConfig default_tracking_config() {
   config.prior_sigma_per_metre = 0.0;            // for every increment,
   config.prior_at_catch_ups = true;              // catch-ups included (degraded acapulco: 0.43 m, 1.00 without)
   config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands
+  config.odometry_guard.confirm_burst = 0.0;     // the kernel already yields to the scans (below)
   return config;
 }
 

@@ -115,8 +115,10 @@ struct HectorSlamConfig {
   // With the odometry prior, each increment is checked first (core/odometry_guard.hpp): a scan
   // whose increment is not trusted (a stall, its catch-up, a jump) is matched as without
   // odometry (the settings above, no prior, no solution remapping) from two starts, and the
-  // better fit is kept (HectorSlam::untrusted_starts).
-  OdometryGuardConfig odometry_guard{};
+  // better fit is kept (HectorSlam::untrusted_starts). A standing increment within a burst of
+  // scans is confirmed against the last motion repeated (confirm_burst 5, the guard's 0: off;
+  // HectorSlam::confirming_start).
+  OdometryGuardConfig odometry_guard{.confirm_burst = 5.0};
   // Fusion by uncertainty (core/motion_fusion.hpp; not in the paper): where the odometry is
   // trusted, the match is one measurement of the pose and the prediction another, a Kalman
   // filter's: the last pose's covariance plus the odometry's motion noise (its scale learnt from
@@ -249,8 +251,13 @@ class HectorSlam {
  private:
   struct ScanMatch {
     MatchResult result;
-    bool refuted = false;  // an increment to be confirmed lost to the last pose (OdometryCheck::confirm)
+    bool refuted = false;  // an increment to be confirmed lost to the competing start (confirming_start)
   };
+  struct ConfirmingStart {
+    SE2 pose;
+    std::optional<PosePrior> prior;
+  };
+  std::optional<ConfirmingStart> confirming_start(const SE2& prediction) const;
   ScanMatch match(const LaserScan& corrected, const HectorInputs& inputs, const SE2& prediction) const;
   struct UntrustedStarts {
     SE2 first;                   // the prediction

@@ -243,7 +243,7 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
       if (alternative_cost < kCompetingStartAdvantage * cost) {
         matched = alternative;
         checked.refuted = odometry.confirm;
-        if (checked.refuted) odometry_guard_.count_refutation();
+        if (checked.refuted) odometry_guard_.count_refutation(checked);
       }
     }
     learn_odometry_noise(checked, predicting, previous, match);
