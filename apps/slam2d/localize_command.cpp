@@ -73,7 +73,10 @@ void run_localize(const LocalizeOptions& options) {
     kidnap = Kidnap{.at = *options.kidnap_at, .by = SE2(by[0], by[1], deg_to_rad(by[2]))};
   }
   LocalizationSession session(*localizer, kidnap, OdometryGuardConfig{}, &map);
-  LogReader reader(options.log, options.input);
+  LogReaderOptions input = options.input;  // with the odometry time offset the reader compensates
+  const OdometryTimeOffsetChoice time_offset =
+      resolve_odometry_time_offset(options.log, options.odometry_time_offset, input, options.quiet);
+  LogReader reader(options.log, input);
   Progress progress("localize", options.quiet);
   LocalizationEstimate last;
   std::vector<SE2> odometry;
@@ -99,7 +102,7 @@ void run_localize(const LocalizeOptions& options) {
   OdometrySmoothingStats smoothing;
   const Trajectory trajectory = smoothed_run(session, odometry, options.odometry_smoothing, smoothing);
   write_trajectory(options.out, trajectory, trajectory_format_from_name(options.trajectory_format));
-  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, options.input, true, occupancy, trajectory);
+  if (!options.mcap.empty()) write_run_mcap(options.mcap, options.log, input, true, occupancy, trajectory);
   if (!options.png.empty()) write_png(options.png, run_picture(occupancy, trajectory, session, last, *localizer));
 
   const double cpu = clock.cpu_seconds();
@@ -108,6 +111,7 @@ void run_localize(const LocalizeOptions& options) {
   if (!options.config.empty()) summary.add("config", options.config);
   summary.merge(settings);
   summary.add("odometry_steps_reversed", reader.stats().odometry_steps_reversed);
+  summary.merge(odometry_time_offset_json(time_offset));
   summary.merge(odometry_report(session.odometry_stats()));
   std::vector<std::string> warnings = reader_warnings(reader);
   for (std::string& warning : odometry_warnings(session.odometry_stats())) warnings.push_back(std::move(warning));
@@ -157,6 +161,7 @@ void add_localize_command(CLI::App& app) {
   command->add_option("--kidnap-by", options->kidnap_by, "The kidnap's extra motion dx,dy,dtheta (m, m, deg; robot frame)")
       ->capture_default_str();
   add_sensor_options(command, options->input);
+  add_odometry_time_offset_option(command, options->odometry_time_offset);
   command->add_option("--out", options->out, "Trajectory file (one line per scan: stamp x y theta)")->required();
   command->add_option("--png", options->png,
                       "Also draw the run on the map: localized stretches red, lost ones orange, the final 2-sigma "

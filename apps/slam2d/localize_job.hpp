@@ -31,6 +31,7 @@ struct LocalizeOptions {
   std::string kidnap_by = "5,0,90";
   std::optional<std::string> sensor;
   LogReaderOptions input;  // CARMEN geometry overrides, bag topics and frames (sensor_options.hpp)
+  std::string odometry_time_offset = "auto";  // auto | off | seconds (sensor_options.hpp)
   std::string out;
   std::string trajectory_format = "text";  // text | tum
   std::string mcap;                        // when set: the run for Foxglove (io/run_mcap.hpp)
