@@ -244,6 +244,7 @@ MappingRun map_with_hector(const MapJobOptions& options, const OdometryFeed& fee
   run.map = slam.occupancy_map();
   run.resolution = config.map.grid.resolution;
   run.method_summary.add("odometry", feed.uses_odometry()).add("levels", config.map.levels).add("imu_scans", imu_scans);
+  run.method_summary.add("stuck_matches", slam.stuck_matches());
   report_gaps(run, slam.gap_stats());
   if (feed.uses_odometry()) {
     report_odometry(run, slam.odometry_stats());
@@ -296,6 +297,7 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
                                        stats.rejected_large_closures));
   }
   run.method_summary.add("optimizations", stats.optimizations).add("sequential_failures", stats.sequential_failures);
+  run.method_summary.add("stuck_matches", slam.stuck_matches());
   run.method_summary.add("scan_gaps", stats.gaps).add("gaps_tracked_through", stats.gaps_tracked_through);
   run.method_summary.add("optimization_iterations", stats.optimization_iterations)
       .add("deferred_optimizations", stats.deferred_optimizations)
@@ -347,6 +349,7 @@ MappingRun map_with_rbpf(const MapJobOptions& options, const OdometryFeed& feed)
   run.method_summary.add("threads", config.threads);
   run.method_summary.add("updates", stats.updates).add("resamplings", stats.resamplings);
   run.method_summary.add("neff_min", stats.neff_min).add("fallbacks", stats.fallbacks);
+  run.method_summary.add("stuck_matches", stats.stuck_matches);
   if (config.scan_odometry_prior_from_motion_noise) {
     run.method_summary.add("odometry_noise_scale_translation", slam.scan_odometry_noise().translation_scale());
     run.method_summary.add("odometry_noise_scale_rotation", slam.scan_odometry_noise().rotation_scale());

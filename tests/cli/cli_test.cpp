@@ -137,13 +137,15 @@ TEST_F(CliTest, MapWritesEveryOutputWithOneTrajectoryLinePerScan) {
 }
 
 // --smoothing-third-stream: the smoother gets PL-ICP scan odometry as a third stream and says so;
-// on the clean simulated run the poses stay as good as with two streams.
+// on the clean simulated run the poses stay as good as with two streams. (Graph SLAM: Hector's
+// matches on this run are held back along the office's plain corridor, 1.2 m for 8 s, before the
+// odometry refutes them, core/match_progress.hpp; the streams would be compared across that jump.)
 TEST_F(CliTest, MapSmoothsWithAThirdStreamWhenAsked) {
   TempDir out;
   double ate[2] = {0.0, 0.0};
   for (const bool third : {false, true}) {
     const std::string dir = out.file(third ? "three" : "two");
-    const CommandResult result = run_command(slam2d("map --quiet --method hector --out " + dir + " " + log() +
+    const CommandResult result = run_command(slam2d("map --quiet --method graph --out " + dir + " " + log() +
                                                     (third ? " --smoothing-third-stream" : "")));
     ASSERT_EQ(result.exit_code, 0) << result.errors;
     const std::string summary = read_text(dir + "/summary.json");
@@ -322,6 +324,28 @@ TEST_F(CliTest, SimulateIsDeterministic) {
   ASSERT_EQ(run_command(slam2d("simulate --quiet --duration 30 --seed 6 --out " + out.file("other.clf"))).exit_code, 0);
   std::ifstream c(out.file("other.clf"));
   EXPECT_NE(text_a, std::string((std::istreambuf_iterator<char>(c)), {}));
+}
+
+// `simulate --config` reads any SimulationConfig field; the flags override the file, and a key the
+// table does not know stops it at its line with nothing written.
+TEST(CliSimulate, AConfigFileSetsTheSimulationAndTheFlagsOverrideIt) {
+  TempDir out;
+  write_text(out.file("sim.yaml"), "duration: 100\nspeed: 0.4\nlaser:\n  rate_hz: 2\n  range_max: 81.9\n");
+  const CommandResult result = run_command(slam2d("simulate --json --world hospital --duration 20 --config " +
+                                                  out.file("sim.yaml") + " --out " + out.file("h.clf")));
+  ASSERT_EQ(result.exit_code, 0) << result.errors;
+  EXPECT_EQ(json_number(result.output, "scans"), 41.0);  // 20 s (the flag, not the file's 100) at 2 Hz
+  EXPECT_EQ(json_number(result.output, "duration_s"), 20.0);
+  EXPECT_LT(*json_number(result.output, "path_length_m"), 0.4 * 20.0);
+  const CommandResult info = run_command(slam2d("info --json " + out.file("h.clf")));
+  ASSERT_EQ(info.exit_code, 0) << info.errors;
+  EXPECT_NEAR(*json_number(info.output, "rate_hz"), 2.0, 0.01);
+  EXPECT_GT(*json_number(info.output, "max_range"), 80.0);
+  write_text(out.file("bad.yaml"), "laser:\n  rate_hz: 2\n  bogus: 1\n");
+  const CommandResult bad = run_command(slam2d("simulate --config " + out.file("bad.yaml") + " --out " + out.file("b.clf")));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.errors.find(out.file("bad.yaml") + ":3"), std::string::npos) << bad.errors;
+  EXPECT_FALSE(std::filesystem::exists(out.file("b.clf")));
 }
 
 // Bad input: one line "PATH:LINE: message" on stderr, exit 1, no output left behind.

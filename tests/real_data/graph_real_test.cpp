@@ -135,13 +135,14 @@ TEST(GraphSlamRealData, OptimisesFr079sShortCyclesOverTheirNeighbourhood) {
 // (HectorSlamConfig::prior_from_motion_noise, with Hector's Cauchy kernel; the default) holds the
 // poses to the good odometry there; the constant weak prior of the defaults before 2026-12-03
 // (sigma 0.1 m, a plain Gaussian, with the fixed sequential covariance and odometry edges) does not
-// (measured: 0.044 m against 1.00 m over all relations; clean 0.038 m).
+// (measured: 0.044 m against 1.00 m over all relations; clean 0.038 m; about 0.2 m since the odometry
+// refutes the tracker's matches held back over four map updates, core/match_progress.hpp).
 TEST(GraphSlamRealData, APriorWeighedByTheMotionNoiseHoldsGlassOverGoodOdometry) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::string glass = "glass:sectors=3,width=45";
   const GraphSlamConfig fixed = test::graph_with_fixed_tracker_prior();
   EXPECT_LT(error_under(data, "aces", glass, GraphSlamConfig{}), 0.08);
-  EXPECT_GT(error_under(data, "aces", glass, fixed), 0.3) << "the fault no longer tests the prior";
+  EXPECT_GT(error_under(data, "aces", glass, fixed), 0.15) << "the fault no longer tests the prior";
 }
 
 // Freiburg campus, SLAM-corrected: the odometry of its FLASER lines is the corrected trajectory

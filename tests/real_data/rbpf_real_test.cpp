@@ -113,8 +113,11 @@ TEST(RbpfRealData, APriorFromTheLearntMotionNoiseHoldsGlassOverGoodOdometry) {
   learnt.scan_odometry_prior_from_motion_noise = true;
   const double with_it = aces_short_error_under(data, glass, learnt);
   const double without = aces_short_error_under(data, glass, RbpfConfig{});
-  EXPECT_LT(with_it, 0.050);  // measured 0.0429 m and 0.0854 m without; the odometry alone 0.0374 m
-  EXPECT_GT(without, 0.065) << "the fault no longer tests the prior";
+  // Measured 0.0429 m and 0.0854 m without (less since the odometry refutes per-scan matches held
+  // back over four updates, core/match_progress.hpp: 0.0640 m when it did over two); the odometry
+  // alone 0.0374 m.
+  EXPECT_LT(with_it, 0.050);
+  EXPECT_GT(without, 0.058) << "the fault no longer tests the prior";
 }
 
 // Intel's wheel odometry turns about 0.06 rad per metre less than the robot did and reads its

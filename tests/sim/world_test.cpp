@@ -92,13 +92,14 @@ TEST(RayCaster, AgreesWithBruteForceOnRandomRays) {
 }
 
 TEST(Worlds, UnknownNameListsTheKnownOnes) {
-  EXPECT_EQ(world_names(), std::vector<std::string>{"office"});
+  EXPECT_EQ(world_names(), (std::vector<std::string>{"office", "hospital"}));
   try {
     make_world("castle");
     FAIL() << "expected an Error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("castle"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("office"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("hospital"), std::string::npos);
   }
 }
 
@@ -163,6 +164,39 @@ TEST(OfficeWorld, LongCorridorStretchIsPlain) {
   }
   // A door (S3 at x = 18) opens to the south: the ray runs into the room.
   EXPECT_GT(*cast_ray(world, Vector2d(18.0, 6.0), -kPi / 2, 30.0), 4.0);
+}
+
+TEST(HospitalWorld, TheRouteRunsDownTheMiddleOfACorridorRing) {
+  const World world = make_world("hospital");
+  EXPECT_EQ(world.name, "hospital");
+  for (const WallSegment& wall : world.walls) {
+    EXPECT_TRUE(world.bounds.contains(wall.a) && world.bounds.contains(wall.b));
+  }
+  // The closed route runs down the corridors' centre lines (2.4 m wide): no point of it is nearer
+  // than 1.2 m to a wall.
+  const std::size_t n = world.route.size();
+  double length = 0.0, min_clearance = 1e9;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector2d a = world.route[i], b = world.route[(i + 1) % n];
+    length += (b - a).norm();
+    for (double s = 0.0; s <= 1.0; s += 0.001) min_clearance = std::min(min_clearance, distance_to_nearest_wall(world, a + s * (b - a)));
+  }
+  EXPECT_NEAR(min_clearance, 1.2, 1e-9);
+  EXPECT_NEAR(length, 2.0 * (77.6 + 27.6), 1e-9);
+}
+
+TEST(HospitalWorld, ThePlainStretchFixesTheRobotAcrossTheCorridorOnly) {
+  // From x = 30 to 60 on the south corridor both walls are 1.2 m away without a recess, and the
+  // corridor runs on beyond a 25 m usable range ahead: nothing in a scan's reach marks the
+  // position along it.
+  const World world = make_world("hospital");
+  for (double x = 30.0; x <= 60.0; x += 0.25) {
+    EXPECT_NEAR(*cast_ray(world, Vector2d(x, 1.2), kPi / 2, 30.0), 1.2, 1e-12) << x;
+    EXPECT_NEAR(*cast_ray(world, Vector2d(x, 1.2), -kPi / 2, 30.0), 1.2, 1e-12) << x;
+  }
+  EXPECT_FALSE(cast_ray(world, Vector2d(35.0, 1.2), 0.0, 25.0).has_value());
+  // A recess elsewhere (the outer wall's at x = 27) sets the wall back by 0.6 m.
+  EXPECT_NEAR(*cast_ray(world, Vector2d(27.0, 1.2), -kPi / 2, 30.0), 1.8, 1e-12);
 }
 
 TEST(RasterizeWorld, WallsAreOccupiedAndTheRouteIsFree) {

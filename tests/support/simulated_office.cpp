@@ -33,4 +33,16 @@ std::vector<SE2> odometry_with_heading_drift(const SimulatedRun& run, double rat
   return drifting;
 }
 
+SimulationConfig hospital_simulation(double duration) {
+  SimulationConfig simulation;
+  simulation.world = "hospital";
+  simulation.duration = duration;
+  simulation.speed = 0.4;
+  simulation.laser.rate_hz = 2.0;
+  simulation.laser.range_max = 81.9;
+  simulation.odometry.scale_error = 0.002;
+  simulation.odometry.heading_bias = 0.0005;
+  return simulation;
+}
+
 }  // namespace slam2d::test

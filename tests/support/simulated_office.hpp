@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The simulated office runs the tests share, simulated once per test binary.
+// The simulated office runs the tests share, simulated once per test binary, and the hospital
+// world's settings.
 
 #include <cstdint>
 #include <vector>
@@ -13,6 +14,10 @@ namespace slam2d::test {
 /// The office world driven for `duration` s with `seed` (everything else SimulationConfig's
 /// defaults), simulated at the first call and kept for the later ones.
 const SimulatedRun& simulated_office(double duration, std::uint64_t seed);
+
+/// The hospital world driven as bench/datasets/hospital_world.yaml drives it (a scan every 0.2 m,
+/// no return at 81.9 m, a good odometry) for `duration` s.
+SimulationConfig hospital_simulation(double duration);
 
 /// The run's odometry poses at its laser messages, with a heading that drifts by `rate` rad per
 /// metre driven forwards (Intel's wheel odometry: 0.06).

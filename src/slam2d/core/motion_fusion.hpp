@@ -205,10 +205,11 @@ class OdometryNoiseModel {
   std::size_t observations() const { return translation_scale_.observations(); }
   const OdometryNoiseConfig& config() const { return config_; }
 
- private:
-  double sigma_translation(const SE2& increment) const;  // unscaled
+  /// The model's sigmas of an increment, unscaled (the configured model, before any learning).
+  double sigma_translation(const SE2& increment) const;
   double sigma_rotation(const SE2& increment) const;
 
+ private:
   OdometryNoiseConfig config_;
   NoiseScaleEstimate translation_scale_;
   NoiseScaleEstimate rotation_scale_;

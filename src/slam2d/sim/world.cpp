@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/sim/hospital_world.hpp"
 #include "slam2d/sim/office_world.hpp"
 #include "slam2d/sim/ray_caster.hpp"
 
@@ -47,10 +48,11 @@ void mark_segment(OccupancyMap& map, const WallSegment& wall) {
 
 }  // namespace
 
-std::vector<std::string> world_names() { return {"office"}; }
+std::vector<std::string> world_names() { return {"office", "hospital"}; }
 
 World make_world(const std::string& name) {
   if (name == "office") return make_office_world();
+  if (name == "hospital") return make_hospital_world();
   std::string known;
   for (const std::string& n : world_names()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown world '" + name + "' (known worlds: " + known + ")");

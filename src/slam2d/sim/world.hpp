@@ -32,7 +32,8 @@ struct World {
 /// The names make_world knows.
 std::vector<std::string> world_names();
 
-/// A built-in world by name: "office" (a 30 m x 20 m office floor, see office_world.cpp).
+/// A built-in world by name: "office" (a 30 m x 20 m office floor, see office_world.cpp) or
+/// "hospital" (an 80 m x 30 m corridor ring, see hospital_world.cpp).
 /// Throws Error naming the known worlds for an unknown name.
 World make_world(const std::string& name);
 

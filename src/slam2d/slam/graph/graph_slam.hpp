@@ -247,6 +247,8 @@ class GraphSlam {
   const GraphSlamStats& stats() const { return stats_; }
   /// What the tracker's odometry guard found (empty before the first scan or without odometry).
   OdometryGuardStats odometry_stats() const { return tracker_ ? tracker_->odometry_stats() : OdometryGuardStats{}; }
+  /// The tracker's scans whose matched motion the odometry refuted (HectorSlam::stuck_matches).
+  std::size_t stuck_matches() const { return tracker_ ? tracker_->stuck_matches() : 0; }
   const GraphSlamConfig& config() const { return config_; }
   /// The learnt noise model that weighs the odometry: the odometry edges' when they are on, else
   /// the tracker's, whose prior it weighs.

@@ -17,6 +17,7 @@
 #include "slam2d/core/covariance.hpp"
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/motion_fusion.hpp"
+#include "slam2d/core/match_progress.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/se2.hpp"
 #include "slam2d/core/trajectory.hpp"
@@ -238,6 +239,9 @@ class HectorSlam {
   /// One pose per scan added, in order, stamped with the scan's stamp.
   const Trajectory& trajectory() const { return trajectory_; }
   std::size_t map_updates() const { return map_updates_; }
+  /// Scans whose matched motion since the last map update the odometry refuted (it then carries
+  /// the stretch: core/match_progress.hpp).
+  std::size_t stuck_matches() const { return stuck_matches_; }
   const HectorSlamConfig& config() const { return config_; }
   const OdometryGuardStats& odometry_stats() const { return odometry_guard_.stats(); }
   const MotionFusionStats& fusion_stats() const { return fusion_stats_; }
@@ -274,6 +278,7 @@ class HectorSlam {
   void fuse(HectorStep& step);
   Covariance3 predicted_covariance() const;
   SE2 odometry_increment() const;
+  bool odometry_refutes_matches(const SE2& T_map_robot) const;
   bool needs_map_update(const SE2& T_map_robot) const;
   void integrate(const LaserScan& scan, const HectorInputs& inputs, const SE2& T_map_robot);
   void begin_relocalization(double gap);
@@ -297,6 +302,8 @@ class HectorSlam {
   double previous_dt_ = 0.0;           // s, between the two previous scans
   SE2 last_update_pose_;
   std::size_t map_updates_ = 0;
+  MatchProgress progress_;  // the guarded odometry since the last map update
+  std::size_t stuck_matches_ = 0;
   OdometryNoiseModel odometry_noise_;
   OdometryCalibration odometry_calibration_;          // calibrating()
   CalibrationStretches calibration_stretches_;

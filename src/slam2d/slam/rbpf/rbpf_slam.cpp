@@ -249,10 +249,25 @@ SE2 RbpfSlam::corrected_odometry(const LaserScan& scan, const OdometryCheck& odo
     learn_odometry_noise(checked, predicting, previous, match);
     if (matched) corrected = last_corrected_odometry_ * previous.between(*matched);
     learn_odometry_calibration(checked, delta, match, corrected);
+    progress_.add(delta, checked.trusted() && !checked.refuted);
+    if (!relocalization_ && !update_odometry_.empty() && odometry_refutes_matches(corrected)) {
+      corrected = update_odometry_.back() * progress_.odometry();  // the odometry carries the stretch
+      ++stats_.stuck_matches;
+    }
   }
   last_corrected_odometry_ = corrected;
   if (odometry.moved) last_moved_corrected_ = corrected;
   return corrected;
+}
+
+// Whether the odometry since the last update refutes the scan-matched motion to `corrected`
+// (core/match_progress.hpp), by the motion model's sigma: matched against a map the filter updates
+// only when the matched motion reaches update_distance, a match held back would hold the filter
+// (the hospital world's corridor: the robot stood still in the map for 55 s while it drove 22 m;
+// 16.0 -> 0.91 m ATE).
+bool RbpfSlam::odometry_refutes_matches(const SE2& corrected) const {
+  const double sigma = motion_sigmas(progress_.odometry(), config_.motion).x();
+  return progress_.refutes(update_odometry_.back().between(corrected), config_.update_distance, sigma);
 }
 
 // The motion prior's sigmas for the per-scan matching of the increment `delta`: the motion model's,
@@ -308,6 +323,7 @@ RbpfStep RbpfSlam::filter(const LaserScan& scan, const SE2& T_odom_robot) {
     const std::vector<Eigen::Vector2d> points = usable_end_points(scan, config_.min_range, config_.max_range);
     update_particles(scan, points, u);
     update_odometry_.push_back(T_odom_robot);
+    progress_.restart();
     last_update_stamp_ = scan.stamp;
     step.resampled = resample_if_needed();
     ++stats_.updates;

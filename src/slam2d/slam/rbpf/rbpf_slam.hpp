@@ -28,6 +28,7 @@
 #include "slam2d/core/laser_scan.hpp"
 #include "slam2d/core/motion_fusion.hpp"
 #include "slam2d/core/occupancy_map.hpp"
+#include "slam2d/core/match_progress.hpp"
 #include "slam2d/core/odometry_guard.hpp"
 #include "slam2d/core/scan_gaps.hpp"
 #include "slam2d/core/se2.hpp"
@@ -193,6 +194,7 @@ struct RbpfStats {
   std::size_t updates = 0;
   std::size_t resamplings = 0;
   std::size_t fallbacks = 0;    // particle updates that used the motion model (match rejected)
+  std::size_t stuck_matches = 0;  // scans whose matched motion since the last update the odometry refuted
   double neff_min = 0.0;        // the smallest N_eff seen at an update (N before any)
 };
 
@@ -259,6 +261,7 @@ class RbpfSlam {
 
   SE2 corrected_odometry(const LaserScan& scan, const OdometryCheck& odometry);
   Eigen::Vector3d scan_odometry_sigmas(const SE2& delta) const;
+  bool odometry_refutes_matches(const SE2& corrected) const;
   void learn_odometry_noise(const OdometryCheck& odometry, const SE2& delta, const SE2& previous,
                             const ProposalResult& match);
   void learn_odometry_calibration(const OdometryCheck& odometry, const SE2& delta, const ProposalResult& match,
@@ -276,6 +279,7 @@ class RbpfSlam {
   OdometryCalibration scan_odometry_calibration_;  // calibrating()
   CalibrationStretches calibration_stretches_;
   SE2 last_moved_corrected_;     // ... at the last scan whose wheel-odometry pose moved
+  MatchProgress progress_;       // the guarded odometry since the last update
   std::vector<RbpfParticle> particles_;
   std::vector<ScanRecord> scans_;
   std::vector<SE2> update_odometry_;  // odometry pose at each update
