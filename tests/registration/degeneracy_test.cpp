@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <numbers>
 
 #include "scan_pair_fixture.hpp"
 #include "slam2d/core/error.hpp"
@@ -90,6 +92,78 @@ TEST(Degeneracy, InformationDecompositionScalesRotationByLength) {
   EXPECT_TRUE(weak.degenerate);
   EXPECT_NEAR(std::abs(weak.weak_direction.y()), 1.0, 1e-12);
   EXPECT_THROW(analyze_information(information, 1.0, {.min_eigenvalue_ratio = 2.0}), Error);
+}
+
+// End points in beam order, one a degree over the front half, of walls at y = +-1.2 m (a corridor
+// along x), out to 25 m.
+std::vector<Eigen::Vector2d> corridor_points() {
+  std::vector<Eigen::Vector2d> points;
+  for (int k = -89; k <= 89; ++k) {
+    const double angle = k * std::numbers::pi / 180.0;
+    if (k == 0) continue;
+    const double range = 1.2 / std::abs(std::sin(angle));
+    if (range < 25.0) points.emplace_back(range * std::cos(angle), range * std::sin(angle));
+  }
+  return points;
+}
+
+// The weak over strong eigenvalue of the translational information (the rotation marginalised).
+double translation_ratio(const Eigen::Matrix3d& information) {
+  const Eigen::Matrix2d t = information.topLeftCorner<2, 2>() -
+                            information.block<2, 1>(0, 2) * information.block<1, 2>(2, 0) / information(2, 2);
+  const Eigen::Vector2d eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(t).eigenvalues();
+  return eigenvalues(0) / eigenvalues(1);
+}
+
+TEST(ScanGeometry, ACorridorScanCarriesNothingAlongItsAxisAndARoomScanCarriesEverything) {
+  const Eigen::Matrix3d corridor = scan_geometry(corridor_points()).information;
+  EXPECT_LT(corridor(0, 0), 1e-6 * corridor(1, 1));  // the walls' normals are all along y
+  EXPECT_LT(translation_ratio(corridor), 1e-6);
+  // A square room 4 m across, seen from off its centre: walls in both directions.
+  std::vector<Eigen::Vector2d> room;
+  for (int k = 0; k < 360; ++k) {
+    const Eigen::Vector2d d(std::cos(k * std::numbers::pi / 180.0), std::sin(k * std::numbers::pi / 180.0));
+    const double to_x = d.x() > 0.0 ? 1.5 / d.x() : 2.5 / -d.x();
+    const double to_y = d.y() > 0.0 ? 2.2 / d.y() : 1.8 / -d.y();
+    room.push_back(std::min(to_x, to_y) * d);
+  }
+  EXPECT_GT(translation_ratio(scan_geometry(room).information), 0.5);
+}
+
+TEST(ScanGeometry, LoneReturnsBetweenTwoSurfacesAddNothing) {
+  // Mixed pixels: every other beam of a stretch lands half way to a wall 10 m behind the near one.
+  const std::vector<Eigen::Vector2d> clean = corridor_points();
+  std::vector<Eigen::Vector2d> mixed;
+  for (std::size_t i = 0; i < clean.size(); ++i) {
+    mixed.push_back(clean[i]);
+    if (i % 2 == 0 && i > 40 && i < 80) mixed.push_back(clean[i] * 4.0);  // 3-40 m out, metres apart
+  }
+  const Eigen::Matrix3d a = scan_geometry(clean).information;
+  const Eigen::Matrix3d b = scan_geometry(mixed).information;
+  EXPECT_LT(translation_ratio(b), 1e-6);  // still nothing along the corridor
+  EXPECT_LE(b(1, 1), a(1, 1));            // the interleaved stretch loses its chords and adds nothing
+  EXPECT_GT(b(1, 1), 0.3 * a(1, 1));
+  EXPECT_TRUE(scan_geometry({{1.0, 0.0}, {5.0, 3.0}, {-2.0, 7.0}}).information.isZero());  // no surface
+}
+
+TEST(ScanGeometry, ADoorFrameIsAnEdgeAndAGrazingWallSampledSparselyIsNot) {
+  // The corridor's far wall points are metres apart (lone returns on one line): no edge.
+  EXPECT_EQ(scan_geometry(corridor_points()).edges, 0u);
+  // A door frame on the left wall: the wall ends at x = 1 and goes on 0.4 m farther back from x = 2.
+  std::vector<Eigen::Vector2d> frame;
+  for (int k = 0; k <= 20; ++k) frame.emplace_back(0.05 * k, 1.2);        // the wall up to the frame
+  for (int k = 0; k <= 20; ++k) frame.emplace_back(2.0 + 0.05 * k, 1.6);  // the recess behind it
+  EXPECT_EQ(scan_geometry(frame).edges, 1u);
+  // The same wall with a gap (glass, a dropped stretch of beams) goes on along its line: no edge.
+  std::vector<Eigen::Vector2d> gap;
+  for (int k = 0; k <= 20; ++k) gap.emplace_back(0.05 * k, 1.2);
+  for (int k = 0; k <= 20; ++k) gap.emplace_back(2.0 + 0.05 * k, 1.2);
+  EXPECT_EQ(scan_geometry(gap).edges, 0u);
+  // Behind up to eight lone returns (mixed pixels at the frame) it is still an edge.
+  std::vector<Eigen::Vector2d> mixed = {frame.begin(), frame.begin() + 21};
+  for (int k = 0; k < 4; ++k) mixed.emplace_back(1.2 + 0.2 * k, 1.2 + 3.0 * (k % 2) + 2.0);
+  mixed.insert(mixed.end(), frame.begin() + 21, frame.end());
+  EXPECT_EQ(scan_geometry(mixed).edges, 1u);
 }
 
 }  // namespace

@@ -19,6 +19,12 @@ const SimulatedRun& simulated_office(double duration, std::uint64_t seed) {
   return it->second;
 }
 
+Trajectory odometry_of(const SimulatedRun& run) {
+  Trajectory odometry;
+  for (const LaserMessage* laser : laser_messages(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
+  return odometry;
+}
+
 std::vector<SE2> odometry_with_heading_drift(const SimulatedRun& run, double rate) {
   const std::vector<const LaserMessage*> lasers = laser_messages(run);
   std::vector<SE2> drifting;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/normals.hpp"
@@ -34,6 +35,39 @@ std::optional<Point2> normal_of(const PointCloud2& target, const Correspondence&
   if (!has_normal(target, c.target)) return std::nullopt;
   return target.normals[c.target];
 }
+
+// The sum of a_i a_i^T / sigma^2, a_i = (n, n^T J p), over points p (the source's, rotated into the
+// target frame: |p| is the distance from the sensor) seen against surfaces with normal n.
+class FisherInformation {
+ public:
+  explicit FisherInformation(const DegeneracyConfig& config)
+      : inverse_variance_(1.0 / (config.range_sigma * config.range_sigma)) {
+    check(config.range_sigma > 0.0, "degeneracy: range_sigma must be > 0");
+  }
+  void add(const Point2& normal, const Point2& point) {
+    const Eigen::Vector3d a(normal.x(), normal.y(), normal.dot(perpendicular(point)));
+    information_ += inverse_variance_ * a * a.transpose();
+    squared_radius_sum_ += point.squaredNorm();
+    ++used_;
+  }
+  const Eigen::Matrix3d& matrix() const { return information_; }
+  // With fewer than 3 points: degenerate, the weak direction x.
+  DegeneracyAnalysis analysis(const DegeneracyConfig& config) const {
+    if (used_ < 3) {
+      DegeneracyAnalysis analysis;
+      analysis.information = information_;
+      analysis.weak_direction = Eigen::Vector3d::UnitX();
+      return analysis;
+    }
+    return analyze_information(information_, std::sqrt(squared_radius_sum_ / static_cast<double>(used_)), config);
+  }
+
+ private:
+  double inverse_variance_;
+  Eigen::Matrix3d information_ = Eigen::Matrix3d::Zero();
+  double squared_radius_sum_ = 0.0;
+  std::size_t used_ = 0;
+};
 
 }  // namespace
 
@@ -65,7 +99,6 @@ DegeneracyAnalysis analyze_information(const Eigen::Matrix3d& information, doubl
 DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointCloud2& source, const SE2& T_target_source,
                                       const std::vector<Correspondence>& correspondences,
                                       const DegeneracyConfig& config) {
-  check(config.range_sigma > 0.0, "degeneracy: range_sigma must be > 0");
   const PointCloud2* with_normals = &target;
   PointCloud2 estimated;
   if (target.normals.size() != target.size() && needs_target_normals(correspondences)) {
@@ -73,27 +106,52 @@ DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointClou
     estimate_normals(estimated);
     with_normals = &estimated;
   }
-  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-  double squared_radius_sum = 0.0;
-  std::size_t used = 0;
-  const double inverse_variance = 1.0 / (config.range_sigma * config.range_sigma);
+  FisherInformation information(config);
   for (const Correspondence& c : correspondences) {
     if (c.source >= source.size() || !(c.weight > 0.0)) continue;
     const std::optional<Point2> n = normal_of(*with_normals, c);
-    if (!n) continue;
-    const Point2 Rp = T_target_source.rotation() * source.points[c.source];
-    const Eigen::Vector3d a(n->x(), n->y(), n->dot(perpendicular(Rp)));
-    information += inverse_variance * a * a.transpose();
-    squared_radius_sum += source.points[c.source].squaredNorm();
-    ++used;
+    if (n) information.add(*n, T_target_source.rotation() * source.points[c.source]);
   }
-  if (used < 3) {
-    DegeneracyAnalysis analysis;
-    analysis.information = information;
-    analysis.weak_direction = Eigen::Vector3d::UnitX();
-    return analysis;
+  return information.analysis(config);
+}
+
+ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_order, const DegeneracyConfig& config) {
+  constexpr std::size_t kReach = 4;          // beams either side of a point in its chord
+  constexpr double kMaxGap = 0.5;            // m, as registration/normals.hpp's max_neighbor_distance
+  constexpr std::size_t kMinSurface = 3;     // points in a surface (fewer: lone returns)
+  constexpr std::size_t kEdgeLonePoints = 8;  // lone returns an edge may hide behind (mixed pixels)
+  const std::vector<Eigen::Vector2d>& p = points_in_beam_order;
+  // The surfaces: maximal runs of points joined by gaps under kMaxGap, [first, last].
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (runs.empty() || (p[i] - p[i - 1]).squaredNorm() > kMaxGap * kMaxGap) runs.emplace_back(i, i);
+    runs.back().second = i;
   }
-  return analyze_information(information, std::sqrt(squared_radius_sum / static_cast<double>(used)), config);
+  const auto surface = [&](const std::pair<std::size_t, std::size_t>& run) { return run.second - run.first + 1 >= kMinSurface; };
+  ScanGeometry geometry;
+  FisherInformation information(config);
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto [first, last] = runs[r];
+    if (!surface(runs[r])) continue;
+    // Each point against the chord through its neighbours up to kReach beams either side (a
+    // total least squares fit over them gives nearly the same line and costs ten times as much).
+    for (std::size_t i = first; i <= last; ++i) {
+      const Eigen::Vector2d chord = p[std::min(last, i + kReach)] - p[std::max(first, i >= kReach ? i - kReach : 0)];
+      const double length = chord.norm();
+      if (length > 1e-9) information.add(perpendicular(chord) / length, p[i]);
+    }
+    // A depth edge: the next surface, behind at most kEdgeLonePoints lone returns, does not go on
+    // along this one's line (a grazing wall sampled farther apart than kMaxGap does).
+    for (std::size_t next = r + 1; next < runs.size() && runs[next].first - last - 1 <= kEdgeLonePoints; ++next) {
+      if (!surface(runs[next])) continue;
+      const Eigen::Vector2d along = (p[last] - p[std::max(first, last >= kReach ? last - kReach : 0)]).normalized();
+      const Eigen::Vector2d step = p[runs[next].first] - p[last];
+      if (std::abs(perpendicular(along).dot(step)) > 0.05 + 0.02 * step.norm()) ++geometry.edges;
+      break;
+    }
+  }
+  geometry.information = information.matrix();
+  return geometry;
 }
 
 void apply(const DegeneracyAnalysis& analysis, MatchResult& result) {

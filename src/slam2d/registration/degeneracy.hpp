@@ -54,6 +54,22 @@ DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointClou
 DegeneracyAnalysis analyze_information(const Eigen::Matrix3d& information, double length_scale,
                                        const DegeneracyConfig& config = {});
 
+/// What the scan's own geometry fixes, in the scan's frame. Its surfaces are the runs of points in
+/// beam order joined by gaps under 0.5 m, three points or more; `information` holds each of their
+/// points against its surface there, the chord through its neighbours up to four beams either side,
+/// a_i a_i^T / sigma^2 with a_i = (n_i, n_i^T J p_i) (analyze_information decomposes it); `edges`
+/// counts the depth edges, where a surface ends and the next one (behind at most eight lone
+/// returns: mixed pixels) does not go on along its line. A corridor's walls give nothing along its
+/// axis, also where a grid map built from one viewpoint holds a far wall as dots a beam apart,
+/// which pin a scan from farther down the corridor to that viewpoint; an edge (a door frame, the
+/// end of an occluding wall) does fix it, and is a surface's end the information leaves out. Lone
+/// points (a mixed pixel, a far spurious return, the far dots themselves) add nothing.
+struct ScanGeometry {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  std::size_t edges = 0;
+};
+ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_order, const DegeneracyConfig& config = {});
+
 /// Copies the verdict into a result (degenerate, weak_direction, information_eigenvalues) and, when degenerate, raises the
 /// result's variance along the weak direction w to at least the Cramer-Rao bound 1 / (w^T I w)
 /// and at least the variance along the strongest direction times the eigenvalue ratio (1e6 when

@@ -87,6 +87,54 @@ Eigen::Matrix3d constrained_projector(const Eigen::Matrix3d& information, double
   return projector;
 }
 
+// The translation the scan's own geometry leaves open (HectorMatcherConfig::scan_degeneracy_ratio):
+// the weak eigenvector of its translational information with the rotation marginalised (the Schur
+// complement I_tt - I_ttheta I_thetatheta^-1 I_thetat), when its eigenvalue is below the ratio
+// times the strong one's and no depth edge fixes it; steps lose their part along it, turned into
+// the map frame.
+class OpenTranslation {
+ public:
+  explicit OpenTranslation(const Eigen::Vector2d& direction_robot) : direction_robot_(direction_robot) {}
+  static std::optional<OpenTranslation> of(const ScanGeometry& geometry, double ratio) {
+    const Eigen::Matrix3d& information = geometry.information;
+    if (geometry.edges > 0 || !(information(2, 2) > 0.0)) return std::nullopt;
+    const Eigen::Matrix2d t =
+        information.topLeftCorner<2, 2>() - information.block<2, 1>(0, 2) * information.block<1, 2>(2, 0) / information(2, 2);
+    // The eigenvalues of the symmetric 2 x 2 matrix in closed form, and the weak one's eigenvector.
+    const double mean = 0.5 * (t(0, 0) + t(1, 1));
+    const double spread = std::hypot(0.5 * (t(0, 0) - t(1, 1)), t(0, 1));
+    const double strong = mean + spread;
+    const double weak = mean - spread;
+    if (!(strong > 0.0) || weak >= ratio * strong) return std::nullopt;
+    // The strong axis is at angle atan2(2 t01, t00 - t11) / 2; the weak one is perpendicular.
+    const double angle = 0.5 * std::atan2(2.0 * t(0, 1), t(0, 0) - t(1, 1));
+    return OpenTranslation(Eigen::Vector2d(-std::sin(angle), std::cos(angle)));
+  }
+  Eigen::Vector3d remove_from(const Eigen::Vector3d& step, double heading) const {
+    const Eigen::Vector2d w = Eigen::Rotation2Dd(heading) * direction_robot_;
+    Eigen::Vector3d shaped = step;
+    shaped.head<2>() -= w.dot(step.head<2>()) * w;
+    return shaped;
+  }
+
+ private:
+  Eigen::Vector2d direction_robot_;
+};
+
+// The scan's open translation, once per match (none when scan_degeneracy_ratio is 0). The
+// geometry of the last scan is kept per thread: the RBPF matches one scan once per particle.
+std::optional<OpenTranslation> open_translation(const std::vector<Eigen::Vector2d>& points_robot,
+                                                const HectorMatcherConfig& config) {
+  if (!(config.scan_degeneracy_ratio > 0.0)) return std::nullopt;
+  thread_local std::vector<Eigen::Vector2d> last_points;
+  thread_local ScanGeometry last_geometry = scan_geometry(last_points);
+  if (points_robot != last_points) {
+    last_geometry = scan_geometry(points_robot);
+    last_points = points_robot;
+  }
+  return OpenTranslation::of(last_geometry, config.scan_degeneracy_ratio);
+}
+
 // The covariance s^2 H^-1 with s^2 = sum r^2 / (n - 3), the residual variance. When H is singular
 // or there are too few points, the match says nothing: unknown_covariance(), never a zero one.
 Covariance3 covariance_from_hessian(const NormalEquations<3>& equations) {
@@ -119,18 +167,22 @@ struct HectorCost {
   const std::vector<Eigen::Vector2d>& points_robot;
   const HectorMatcherConfig& config;
   const std::optional<PosePrior>& prior;
+  const std::optional<OpenTranslation>& open;
   Eigen::Matrix3d scan_information = Eigen::Matrix3d::Zero();  // H of the scan alone, at the last linearisation
+  double heading = 0.0;                                         // of the last linearisation
 
   NormalEquations<3> linearize(const Eigen::Vector3d& xi) {
     const SE2 pose = SE2::from_vector(xi);
     NormalEquations<3> equations = hector_linearize(grid, points_robot, pose, config.kernel);
     scan_information = equations.H;
+    heading = pose.theta();
     if (prior) add_pose_prior(equations, pose, *prior);
     return equations;
   }
   Eigen::Vector3d plus(const Eigen::Vector3d& xi, const Eigen::Vector3d& dxi) const { return pose_plus(xi, dxi); }
   Eigen::Vector3d shape_step(Eigen::Vector3d dxi) const {
     if (config.degeneracy_ratio > 0.0) dxi = constrained_projector(scan_information, config.degeneracy_ratio) * dxi;
+    if (open) dxi = open->remove_from(dxi, heading);
     dxi.z() = std::clamp(dxi.z(), -config.max_rotation_step, config.max_rotation_step);
     const double max_translation = config.max_translation_step * grid.geometry().resolution;
     if (dxi.head<2>().norm() > max_translation) dxi.head<2>() *= max_translation / dxi.head<2>().norm();
@@ -154,8 +206,9 @@ LevenbergMarquardtConfig gauss_newton_options(const HectorMatcherConfig& config,
 // One Gauss-Newton run on one grid (the driver's fit: pose, last linearisation, iterations).
 LevenbergMarquardtResult<3> fit_on_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                         const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
-                                        const std::optional<PosePrior>& prior) {
-  HectorCost cost{grid, points_robot, config, prior};
+                                        const std::optional<PosePrior>& prior,
+                                        const std::optional<OpenTranslation>& open) {
+  HectorCost cost{grid, points_robot, config, prior, open};
   return levenberg_marquardt<3>(cost, T_map_robot_guess.vector(), gauss_newton_options(config, iterations));
 }
 
@@ -175,13 +228,14 @@ bool may_overrule(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>&
 LevenbergMarquardtResult<3> fit_with_rotation_search(const OccupancyGrid& grid,
                                                      const std::vector<Eigen::Vector2d>& points_robot, const SE2& guess,
                                                      int iterations, const HectorMatcherConfig& config,
-                                                     const std::optional<PosePrior>& prior) {
-  LevenbergMarquardtResult<3> best = fit_on_grid(grid, points_robot, guess, iterations, config, prior);
+                                                     const std::optional<PosePrior>& prior,
+                                                     const std::optional<OpenTranslation>& open) {
+  LevenbergMarquardtResult<3> best = fit_on_grid(grid, points_robot, guess, iterations, config, prior, open);
   const int starts = static_cast<int>(std::floor(config.rotation_search_range / config.rotation_search_step + 1e-9));
   for (int k = -starts; k <= starts; ++k) {
     if (k == 0) continue;
     const SE2 start = guess * SE2(0.0, 0.0, k * config.rotation_search_step);
-    LevenbergMarquardtResult<3> candidate = fit_on_grid(grid, points_robot, start, iterations, config, prior);
+    LevenbergMarquardtResult<3> candidate = fit_on_grid(grid, points_robot, start, iterations, config, prior, open);
     // A rotated start must beat the current best clearly: in rotationally ambiguous places (a
     // round hall) near-equal costs would otherwise pick a far heading at random.
     if (candidate.equations.cost < (1.0 - config.rotation_search_margin) * best.equations.cost &&
@@ -213,7 +267,9 @@ MatchResult match_result(const LevenbergMarquardtResult<3>& fit, const std::vect
 MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
                                const std::optional<PosePrior>& prior) {
-  return match_result(fit_on_grid(grid, points_robot, T_map_robot_guess, iterations, config, prior), points_robot, prior);
+  return match_result(fit_on_grid(grid, points_robot, T_map_robot_guess, iterations, config, prior,
+                                  open_translation(points_robot, config)),
+                      points_robot, prior);
 }
 
 MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<Eigen::Vector2d>& points_robot,
@@ -228,19 +284,20 @@ MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<E
   }
   // Coarse to fine (Sec. IV-C): only the finest level's fit becomes the result (its covariance
   // and weak direction); the coarser ones only pass their pose on.
+  const std::optional<OpenTranslation> open = open_translation(points_robot, config);
   Eigen::Vector3d pose = T_map_robot_guess.vector();
   int iterations = 0;
   for (int level = pyramid.levels() - 1; level >= 1; --level) {
     const SE2 start = SE2::from_vector(pose);
     const LevenbergMarquardtResult<3> coarse =
         level == pyramid.levels() - 1
-            ? fit_with_rotation_search(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior)
-            : fit_on_grid(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior);
+            ? fit_with_rotation_search(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior, open)
+            : fit_on_grid(pyramid.level(level), points_robot, start, config.coarse_iterations, config, prior, open);
     pose = coarse.x;
     iterations += coarse.iterations;
   }
   MatchResult fine = match_result(
-      fit_on_grid(pyramid.level(0), points_robot, SE2::from_vector(pose), config.fine_iterations, config, prior),
+      fit_on_grid(pyramid.level(0), points_robot, SE2::from_vector(pose), config.fine_iterations, config, prior, open),
       points_robot, prior);
   fine.iterations += iterations;
   return fine;

@@ -72,6 +72,17 @@ struct HectorMatcherConfig {
   // the largest, so that along a corridor's axis the pose stays at the guess (the prediction)
   // instead of following the map's weak, possibly wrong pull. 0 disables it (Hector).
   double degeneracy_ratio = 0.0;       // 1, in [0, 1)
+  // The same remapping, for the translation the scan's own geometry leaves open, whatever the
+  // map's gradient claims: the weak direction of the scan's translational Fisher information
+  // (registration/degeneracy.hpp's scan_geometry, the rotation marginalised) when its eigenvalue
+  // is below this ratio times the strong one's and no depth edge is in view. A grid map built from
+  // one viewpoint down a featureless corridor holds the far walls, which the beams reach at grazing
+  // angles, as dots a beam apart; their gradient pins a scan taken farther down the corridor to that
+  // viewpoint (the hospital world: the RBPF stood still for 8 scans at a time). The guess (the
+  // prediction) keeps that direction. Scans of the three public logs never fall below 0.01
+  // (Intel's lowest 0.02, ACES's 0.04, FR079's 0.12; the hospital world's plain corridor
+  // 0.003-0.006). 0 disables it (Hector, graph SLAM's tracker; the RBPF: 0.01, docs/defaults.md).
+  double scan_degeneracy_ratio = 0.0;  // 1, in [0, 1)
 };
 
 template <typename Fields>
@@ -91,6 +102,8 @@ void describe(Fields& f, HectorMatcherConfig& c) {
            "share of the scan a rotated start beyond the prior kernel's scale must put on occupied cells to win (0: the lower cost wins)");
   f.number("degeneracy_ratio", c.degeneracy_ratio, "1", closed_open(0, 1),
            "solution remapping (Zhang et al. 2016): steps projected onto the scan's eigenvectors above this fraction of the largest (0: off)");
+  f.number("scan_degeneracy_ratio", c.scan_degeneracy_ratio, "1", closed_open(0, 1),
+           "steps lose the translation the scan's own geometry leaves open: its translational information's weak over strong eigenvalue below this (0: off)");
 }
 
 /// An optional Gaussian prior on the pose (not in the paper): adds the residual xi - mean with

@@ -31,12 +31,6 @@ GraphSlam run_graph_slam(const GraphSlamConfig& config, bool use_odometry) {
   return slam;
 }
 
-Trajectory odometry_of(const SimulatedRun& run) {
-  Trajectory odometry;
-  for (const LaserMessage* laser : laser_messages(run)) odometry.push_back(laser->scan.stamp, laser->odom_pose);
-  return odometry;
-}
-
 TEST(KeyframeSelector, TakesDistanceAngleAndTime) {
   KeyframeSelector selector({.min_distance = 0.2, .min_angle = 0.2, .min_time = 5.0});
   EXPECT_TRUE(selector.is_keyframe(SE2(), 0.0));  // the first scan
@@ -77,7 +71,7 @@ TEST_P(GraphSlamOffice, ClosesTheLoopAndRecoversTheTrajectory) {
   EXPECT_GT(slam.stats().keyframes, 50u);
   EXPECT_EQ(slam.graph().size(), slam.stats().keyframes);
   const AteResult ate = absolute_trajectory_error(trajectory, run.truth);
-  const AteResult odometry_ate = absolute_trajectory_error(odometry_of(run), run.truth);
+  const AteResult odometry_ate = absolute_trajectory_error(test::odometry_of(run), run.truth);
   EXPECT_LT(ate.rmse, GetParam().max_ate_rmse) << "max " << ate.max;
   EXPECT_LT(ate.rmse, 0.2 * odometry_ate.rmse);
   double worst_heading = 0.0;

@@ -17,6 +17,7 @@
 #include "slam2d/core/error.hpp"
 #include "slam2d/core/rng.hpp"
 #include "slam2d/eval/ate.hpp"
+#include "slam2d/eval/rpe.hpp"
 #include "slam2d/sim/fault_injection.hpp"
 #include "slam2d/sim/laser_model.hpp"
 #include "slam2d/sim/ray_caster.hpp"
@@ -139,6 +140,40 @@ TEST(HectorMatcher, ACauchyPriorGivesWayToAScanThatRefutesIt) {
   const double distance = std::sqrt(1e5) * 0.03;
   EXPECT_NEAR(equations.cost, cauchy.cost(distance), 1e-12);
   EXPECT_NEAR(equations.H(0, 0), cauchy.weight(distance) * 1e5, 1e-6);
+}
+
+// A scan down a featureless corridor (walls at y = +-1.2 m, one beam a degree over the front half,
+// 25 m usable) is the same wherever along it it is taken. Matched against a map built from one
+// viewpoint, whose far walls the grazing beams left as dots up to metres apart, a scan from 0.2 m
+// farther down is pinned to that viewpoint by the dots; with the scan's open translation left to
+// the guess (HectorMatcherConfig::scan_degeneracy_ratio) it stays where the prediction put it.
+TEST(HectorMatcher, AScanFromFartherDownACorridorIsNotPinnedToTheMapsViewpoint) {
+  LaserScan scan;
+  scan.angle_min = -std::numbers::pi / 2.0;
+  scan.angle_increment = std::numbers::pi / 180.0;
+  scan.range_min = 0.1;
+  scan.range_max = 81.9;
+  for (int k = 0; k <= 180; ++k) {
+    const double s = std::abs(std::sin(scan.angle(static_cast<std::size_t>(k))));
+    scan.ranges.push_back(s > 1e-9 ? std::min(1.2 / s, 81.9) : 81.9);  // 81.9: no return
+  }
+  MapPyramid map({.levels = 3, .grid = {.resolution = 0.05, .probability_hit = 0.9, .max_range = 25.0}});
+  map.integrate_scan(scan, SE2());
+  const auto points = usable_end_points(scan, 0.1, 25.0);
+  const SE2 truth(0.2, 0.0, 0.0);
+  // A weak prior, as the RBPF's per-scan matching's (a twentieth of the motion model's information).
+  const PosePrior prior{truth, Eigen::Vector3d(5.0, 5.0, 15.0).asDiagonal()};
+  const MatchResult pinned = match_scan_to_pyramid(map, points, truth, {.scan_degeneracy_ratio = 0.0}, prior);
+  EXPECT_LT(pinned.T_target_source.x(), 0.1);  // pulled back towards x = 0
+  const MatchResult kept = match_scan_to_pyramid(map, points, truth, {.scan_degeneracy_ratio = 0.01}, prior);
+  EXPECT_NEAR(kept.T_target_source.x(), truth.x(), 0.001);  // along the corridor: the guess
+  EXPECT_TRUE(test::poses_near(kept.T_target_source, truth, 0.005, 0.005));
+  // Across the corridor the scan still decides: a guess 3 cm off to the side comes back.
+  const SE2 aside(0.2, 0.03, 0.0);
+  const MatchResult across = match_scan_to_pyramid(map, points, aside, {.scan_degeneracy_ratio = 0.01},
+                                                   PosePrior{aside, prior.information});
+  EXPECT_NEAR(across.T_target_source.y(), 0.0, 0.01);
+  EXPECT_NEAR(across.T_target_source.x(), truth.x(), 0.001);
 }
 
 // A fan of beams from the origin over bearings [-half_width, half_width], one per 0.005 rad, onto a
@@ -744,7 +779,7 @@ TEST(HectorSlam, OdometryPriorHoldsAFastTurningRunOnEverySeed) {
 TEST(HectorSlam, TheOdometryCarriesTheStretchWherePhantomsTravellingWithTheRobotHoldTheMatchBack) {
   SimulatedRun run = simulate(test::hospital_simulation(700.0));
   apply_faults({parse_fault("mixed-pixels:p=1,alternate=6")}, run.messages, 1);
-  HectorSlam slam;
+  HectorSlam slam;  // the guard alone (core/match_progress.hpp)
   for (const LaserMessage* laser : laser_messages(run)) slam.add_scan(laser->scan, {.T_odom_robot = laser->odom_pose});
   const Trajectory& trajectory = slam.trajectory();
   ASSERT_EQ(trajectory.size(), run.truth.size());
@@ -754,6 +789,30 @@ TEST(HectorSlam, TheOdometryCarriesTheStretchWherePhantomsTravellingWithTheRobot
   EXPECT_GT(slam.stuck_matches(), 0u);
   EXPECT_NEAR(trajectory.path_length(), run.truth.path_length(), 0.05 * run.truth.path_length());
   EXPECT_LT(ate.rmse, 1.5);
+}
+
+// The same run with the scan's open translation left to the odometry along the plain corridor
+// (HectorMatcherConfig::scan_degeneracy_ratio, an option for Hector): over 10 s windows Hector is
+// about as good as the odometry it was given, and better than with the guard alone.
+TEST(HectorSlam, TheScansOpenTranslationLeftToTheOdometryHoldsTheHospitalWorldWithPhantoms) {
+  SimulatedRun run = simulate(test::hospital_simulation(700.0));
+  apply_faults({parse_fault("mixed-pixels:p=1,alternate=6")}, run.messages, 1);
+  const auto rpe_10_s = [&](double ratio) {
+    HectorSlamConfig config;
+    config.matcher.scan_degeneracy_ratio = ratio;
+    HectorSlam slam(config);
+    for (const LaserMessage* laser : laser_messages(run)) slam.add_scan(laser->scan, {.T_odom_robot = laser->odom_pose});
+    return relative_pose_error(slam.trajectory(), run.truth, {.window = RpeWindow::kTime, .delta = 10.0}).translation.mean;
+  };
+  const double guard_alone = rpe_10_s(0.0);
+  const double open = rpe_10_s(0.01);
+  const double wheels =
+      relative_pose_error(test::odometry_of(run), run.truth, {.window = RpeWindow::kTime, .delta = 10.0}).translation.mean;
+  RecordProperty("rpe10_guard_alone_mm", static_cast<int>(1000 * guard_alone));
+  RecordProperty("rpe10_open_mm", static_cast<int>(1000 * open));
+  RecordProperty("rpe10_odometry_mm", static_cast<int>(1000 * wheels));
+  EXPECT_LT(open, 0.75 * guard_alone);
+  EXPECT_LT(open, 1.1 * wheels);
 }
 
 }  // namespace

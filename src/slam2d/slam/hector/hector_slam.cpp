@@ -69,6 +69,7 @@ HectorSlam::HectorSlam(const HectorSlamConfig& config)
   free_matcher_.rotation_search_range = config_.rotation_search_without_odometry;
   free_matcher_.rotation_search_margin = config_.rotation_margin_without_odometry;
   free_matcher_.degeneracy_ratio = 0.0;  // the directions a scan leaves open have no measurement to stay at
+  free_matcher_.scan_degeneracy_ratio = 0.0;  // nor a scan's open translation
   free_recovery_residual_ = config_.recovery_residual_without_odometry;
   validate(free_matcher_);
 }

@@ -70,7 +70,8 @@ void describe(Fields& f, RbpfMotionNoise& c) {
 }
 
 struct RbpfProposalConfig {
-  HectorMatcherConfig matcher{.rotation_search_range = 0.0};  // no multi-start
+  // No multi-start; a corridor's open translation stays with the prediction (docs/defaults.md).
+  HectorMatcherConfig matcher{.rotation_search_range = 0.0, .scan_degeneracy_ratio = 0.01};
   // Picked on ACES, not yet checked on a held-out log (docs/defaults.md), as are weight_gain and
   // the K poses' grid.
   double likelihood_sigma = 0.3;
