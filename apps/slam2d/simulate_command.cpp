@@ -23,7 +23,6 @@ struct SimulateOptions {
   std::optional<std::string> world;
   std::optional<double> duration;
   std::optional<int> beams;
-  SimulationConfig config;  // the file's, then the flags'
   bool json = false;
   bool quiet = false;
 };
@@ -40,13 +39,13 @@ SimulationConfig simulation_config(const SimulateOptions& options) {
 }
 
 void run_simulate(SimulateOptions& options) {
-  options.config = simulation_config(options);
-  const SimulatedRun run = simulate(options.config);
+  const SimulationConfig config = simulation_config(options);  // the file's, then the flags'
+  const SimulatedRun run = simulate(config);
   write_carmen_log(options.out, run_comments(run.config), run.messages);
   if (!options.truth.empty()) write_trajectory(options.truth, run.truth);
   JsonObject json;
-  json.add("log", options.out).add("truth", options.truth).add("world", options.config.world);
-  json.add("seed", static_cast<std::size_t>(options.config.seed)).add("duration_s", options.config.duration);
+  json.add("log", options.out).add("truth", options.truth).add("world", config.world);
+  json.add("seed", static_cast<std::size_t>(config.seed)).add("duration_s", config.duration);
   json.add("scans", run.truth.size()).add("messages", run.messages.size());
   json.add("path_length_m", run.truth.path_length());
   if (options.json) {

@@ -41,7 +41,7 @@ std::optional<Point2> normal_of(const PointCloud2& target, const Correspondence&
 class FisherInformation {
  public:
   explicit FisherInformation(const DegeneracyConfig& config)
-      : inverse_variance_(1.0 / (config.range_sigma * config.range_sigma)) {
+      : config_(config), inverse_variance_(1.0 / (config.range_sigma * config.range_sigma)) {
     check(config.range_sigma > 0.0, "degeneracy: range_sigma must be > 0");
   }
   void add(const Point2& normal, const Point2& point) {
@@ -52,17 +52,18 @@ class FisherInformation {
   }
   const Eigen::Matrix3d& matrix() const { return information_; }
   // With fewer than 3 points: degenerate, the weak direction x.
-  DegeneracyAnalysis analysis(const DegeneracyConfig& config) const {
+  DegeneracyAnalysis analysis() const {
     if (used_ < 3) {
       DegeneracyAnalysis analysis;
       analysis.information = information_;
       analysis.weak_direction = Eigen::Vector3d::UnitX();
       return analysis;
     }
-    return analyze_information(information_, std::sqrt(squared_radius_sum_ / static_cast<double>(used_)), config);
+    return analyze_information(information_, std::sqrt(squared_radius_sum_ / static_cast<double>(used_)), config_);
   }
 
  private:
+  DegeneracyConfig config_;
   double inverse_variance_;
   Eigen::Matrix3d information_ = Eigen::Matrix3d::Zero();
   double squared_radius_sum_ = 0.0;
@@ -112,7 +113,7 @@ DegeneracyAnalysis analyze_degeneracy(const PointCloud2& target, const PointClou
     const std::optional<Point2> n = normal_of(*with_normals, c);
     if (n) information.add(*n, T_target_source.rotation() * source.points[c.source]);
   }
-  return information.analysis(config);
+  return information.analysis();
 }
 
 ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_order, const DegeneracyConfig& config) {
