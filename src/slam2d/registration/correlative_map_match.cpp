@@ -6,6 +6,7 @@
 
 #include "slam2d/core/error.hpp"
 #include "slam2d/registration/kd_tree.hpp"
+#include "slam2d/registration/normals.hpp"
 
 namespace slam2d {
 
@@ -43,18 +44,15 @@ constexpr double kTurnedAway = -0.5;  // cos 120 deg
 
 std::size_t count_inliers(const KdTree2& map, const PointCloud2& map_cloud, const PointCloud2& scan,
                           const SE2& T_map_robot, double distance) {
-  const bool normals = map_cloud.normals.size() == map_cloud.size() && scan.normals.size() == scan.size();
   const Eigen::Matrix2d R = T_map_robot.rotation();
   std::size_t inliers = 0, judged = 0, turned_away = 0;
   for (std::size_t n = 0; n < scan.size(); ++n) {
     const Neighbor nearest = map.nearest(T_map_robot * scan.points[n]);
     if (nearest.index >= map.size() || nearest.squared_distance > distance * distance) continue;
     ++inliers;
-    if (!normals) continue;
-    const double facing = (R * scan.normals[n]).dot(map_cloud.normals[nearest.index]);
-    if (facing == 0.0) continue;  // a zero normal
+    if (!has_normal(scan, n) || !has_normal(map_cloud, nearest.index)) continue;
     ++judged;
-    if (facing < kTurnedAway) ++turned_away;
+    if ((R * scan.normals[n]).dot(map_cloud.normals[nearest.index]) < kTurnedAway) ++turned_away;
   }
   return 2 * turned_away > judged ? 0 : inliers;
 }

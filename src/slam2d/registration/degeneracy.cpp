@@ -155,6 +155,22 @@ ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_or
   return geometry;
 }
 
+std::optional<Eigen::Vector2d> open_translation(const ScanGeometry& geometry, double ratio) {
+  const Eigen::Matrix3d& information = geometry.information;
+  if (geometry.edges > 0 || !(information(2, 2) > 0.0)) return std::nullopt;
+  const Eigen::Matrix2d t =
+      information.topLeftCorner<2, 2>() - information.block<2, 1>(0, 2) * information.block<1, 2>(2, 0) / information(2, 2);
+  // The eigenvalues of the symmetric 2 x 2 matrix in closed form, and the weak one's eigenvector.
+  const double mean = 0.5 * (t(0, 0) + t(1, 1));
+  const double spread = std::hypot(0.5 * (t(0, 0) - t(1, 1)), t(0, 1));
+  const double strong = mean + spread;
+  const double weak = mean - spread;
+  if (!(strong > 0.0) || weak >= ratio * strong) return std::nullopt;
+  // The strong axis is at angle atan2(2 t01, t00 - t11) / 2; the weak one is perpendicular.
+  const double angle = 0.5 * std::atan2(2.0 * t(0, 1), t(0, 0) - t(1, 1));
+  return Eigen::Vector2d(-std::sin(angle), std::cos(angle));
+}
+
 void apply(const DegeneracyAnalysis& analysis, MatchResult& result) {
   result.degenerate = analysis.degenerate;
   result.weak_direction = analysis.weak_direction;

@@ -12,6 +12,7 @@
 // largest.
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "slam2d/core/config_fields.hpp"
@@ -69,6 +70,12 @@ struct ScanGeometry {
   std::size_t edges = 0;
 };
 ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_order, const DegeneracyConfig& config = {});
+
+/// The translation a scan's geometry leaves open: the weak eigenvector (unit, in the scan's frame)
+/// of its translational information with the rotation marginalised (the Schur complement
+/// I_tt - I_ttheta I_thetatheta^-1 I_thetat), when its eigenvalue is below `ratio` times the strong
+/// one's and no depth edge is in view; none otherwise.
+std::optional<Eigen::Vector2d> open_translation(const ScanGeometry& geometry, double ratio);
 
 /// Copies the verdict into a result (degenerate, weak_direction, information_eigenvalues) and, when degenerate, raises the
 /// result's variance along the weak direction w to at least the Cramer-Rao bound 1 / (w^T I w)

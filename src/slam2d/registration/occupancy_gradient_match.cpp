@@ -87,29 +87,12 @@ Eigen::Matrix3d constrained_projector(const Eigen::Matrix3d& information, double
   return projector;
 }
 
-// The translation the scan's own geometry leaves open (HectorMatcherConfig::scan_degeneracy_ratio):
-// the weak eigenvector of its translational information with the rotation marginalised (the Schur
-// complement I_tt - I_ttheta I_thetatheta^-1 I_thetat), when its eigenvalue is below the ratio
-// times the strong one's and no depth edge fixes it; steps lose their part along it, turned into
-// the map frame.
+// The translation the scan's own geometry leaves open (HectorMatcherConfig::scan_degeneracy_ratio,
+// registration/degeneracy.hpp's open_translation): steps lose their part along it, turned into the
+// map frame.
 class OpenTranslation {
  public:
   explicit OpenTranslation(const Eigen::Vector2d& direction_robot) : direction_robot_(direction_robot) {}
-  static std::optional<OpenTranslation> of(const ScanGeometry& geometry, double ratio) {
-    const Eigen::Matrix3d& information = geometry.information;
-    if (geometry.edges > 0 || !(information(2, 2) > 0.0)) return std::nullopt;
-    const Eigen::Matrix2d t =
-        information.topLeftCorner<2, 2>() - information.block<2, 1>(0, 2) * information.block<1, 2>(2, 0) / information(2, 2);
-    // The eigenvalues of the symmetric 2 x 2 matrix in closed form, and the weak one's eigenvector.
-    const double mean = 0.5 * (t(0, 0) + t(1, 1));
-    const double spread = std::hypot(0.5 * (t(0, 0) - t(1, 1)), t(0, 1));
-    const double strong = mean + spread;
-    const double weak = mean - spread;
-    if (!(strong > 0.0) || weak >= ratio * strong) return std::nullopt;
-    // The strong axis is at angle atan2(2 t01, t00 - t11) / 2; the weak one is perpendicular.
-    const double angle = 0.5 * std::atan2(2.0 * t(0, 1), t(0, 0) - t(1, 1));
-    return OpenTranslation(Eigen::Vector2d(-std::sin(angle), std::cos(angle)));
-  }
   Eigen::Vector3d remove_from(const Eigen::Vector3d& step, double heading) const {
     const Eigen::Vector2d w = Eigen::Rotation2Dd(heading) * direction_robot_;
     Eigen::Vector3d shaped = step;
@@ -121,18 +104,11 @@ class OpenTranslation {
   Eigen::Vector2d direction_robot_;
 };
 
-// The scan's open translation, once per match (none when scan_degeneracy_ratio is 0). The
-// geometry of the last scan is kept per thread: the RBPF matches one scan once per particle.
-std::optional<OpenTranslation> open_translation(const std::vector<Eigen::Vector2d>& points_robot,
-                                                const HectorMatcherConfig& config) {
-  if (!(config.scan_degeneracy_ratio > 0.0)) return std::nullopt;
-  thread_local std::vector<Eigen::Vector2d> last_points;
-  thread_local ScanGeometry last_geometry = scan_geometry(last_points);
-  if (points_robot != last_points) {
-    last_geometry = scan_geometry(points_robot);
-    last_points = points_robot;
-  }
-  return OpenTranslation::of(last_geometry, config.scan_degeneracy_ratio);
+std::optional<OpenTranslation> open_translation_of(const std::vector<Eigen::Vector2d>& points_robot,
+                                                   const HectorMatcherConfig& config) {
+  const std::optional<Eigen::Vector2d> direction = scan_open_translation(points_robot, config);
+  if (!direction) return std::nullopt;
+  return OpenTranslation(*direction);
 }
 
 // The covariance s^2 H^-1 with s^2 = sum r^2 / (n - 3), the residual variance. When H is singular
@@ -268,7 +244,7 @@ MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eige
                                const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config,
                                const std::optional<PosePrior>& prior) {
   return match_result(fit_on_grid(grid, points_robot, T_map_robot_guess, iterations, config, prior,
-                                  open_translation(points_robot, config)),
+                                  open_translation_of(points_robot, config)),
                       points_robot, prior);
 }
 
@@ -284,7 +260,7 @@ MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<E
   }
   // Coarse to fine (Sec. IV-C): only the finest level's fit becomes the result (its covariance
   // and weak direction); the coarser ones only pass their pose on.
-  const std::optional<OpenTranslation> open = open_translation(points_robot, config);
+  const std::optional<OpenTranslation> open = open_translation_of(points_robot, config);
   Eigen::Vector3d pose = T_map_robot_guess.vector();
   int iterations = 0;
   for (int level = pyramid.levels() - 1; level >= 1; --level) {
@@ -301,6 +277,20 @@ MatchResult match_scan_to_pyramid(const MapPyramid& pyramid, const std::vector<E
       points_robot, prior);
   fine.iterations += iterations;
   return fine;
+}
+
+// The geometry of the last scan is kept per thread: the RBPF matches one scan once per particle
+// and reads its open translation again for the proposal's fit.
+std::optional<Eigen::Vector2d> scan_open_translation(const std::vector<Eigen::Vector2d>& points_robot,
+                                                     const HectorMatcherConfig& config) {
+  if (!(config.scan_degeneracy_ratio > 0.0)) return std::nullopt;
+  thread_local std::vector<Eigen::Vector2d> last_points;
+  thread_local ScanGeometry last_geometry = scan_geometry(last_points);
+  if (points_robot != last_points) {
+    last_geometry = scan_geometry(points_robot);
+    last_points = points_robot;
+  }
+  return open_translation(last_geometry, config.scan_degeneracy_ratio);
 }
 
 }  // namespace slam2d

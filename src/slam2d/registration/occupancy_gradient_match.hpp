@@ -141,6 +141,12 @@ void validate(const HectorMatcherConfig& config);
 NormalEquations<3> hector_linearize(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                     const SE2& T_map_robot, const RobustKernel& kernel = {});
 
+/// The translation the scan's own geometry leaves open (registration/degeneracy.hpp's
+/// open_translation at config.scan_degeneracy_ratio; none when that is 0): a unit direction in the
+/// scan's frame, which the matcher's steps do not move along.
+std::optional<Eigen::Vector2d> scan_open_translation(const std::vector<Eigen::Vector2d>& points_robot,
+                                                     const HectorMatcherConfig& config);
+
 /// `iterations` Gauss-Newton steps on one grid from `T_map_robot_guess`.
 MatchResult match_scan_to_grid(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points_robot,
                                const SE2& T_map_robot_guess, int iterations, const HectorMatcherConfig& config = {},

@@ -163,7 +163,17 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
     result.matched = true;
     return result;
   }
-  // tau_j at the grid of poses around x*, Eq. (14)-(15); weights relative to the largest.
+  // tau_j at the grid of poses around x*, Eq. (14)-(15); weights relative to the largest. Along
+  // the translation the scan's geometry leaves open (a featureless corridor's axis) the map's
+  // likelihood is not the scan's evidence: a map built from a few viewpoints holds the corridor's
+  // far walls as dots, whose pull varies along the axis and, fitted here at each update, draws the
+  // mean back towards the last viewpoint (the hospital world: 0.46 m lost over 13 m). There the
+  // likelihood is read with that part of x_j removed, and the fit keeps x*'s (the prediction's).
+  const std::optional<Eigen::Vector2d> open = scan_open_translation(points_robot, config.matcher);
+  const auto observed = [&](Eigen::Vector3d vj) {
+    if (open) vj.head<2>() -= open->dot(vj.head<2>()) * *open;
+    return from_local(result.x_star, vj);
+  };
   const int k = config.sample_radius;
   const int side = 2 * k + 1;
   std::vector<Eigen::Vector3d> v;
@@ -178,7 +188,8 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
                                  it * config.sample_step_rotation);
         const SE2 xj = from_local(result.x_star, vj);
         v.push_back(vj);
-        log_tau.push_back(log_observation_likelihood(grid, points_robot, xj, config.likelihood_sigma, config.likelihood_stride) +
+        log_tau.push_back(log_observation_likelihood(grid, points_robot, observed(vj), config.likelihood_sigma,
+                                                     config.likelihood_stride) +
                           log_motion_density(xj, predicted, sigmas));
       }
     }
@@ -199,6 +210,12 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
     covariance += std::exp(log_tau[j] - max_log) * d * d.transpose();  // Eq. (17)
   }
   covariance /= eta;
+  if (open) {  // the prediction stands along the open axis, as in the match
+    const Eigen::Vector3d w(open->x(), open->y(), 0.0);
+    const Eigen::Matrix3d keep = Eigen::Matrix3d::Identity() - w * w.transpose();
+    mean = keep * mean;
+    covariance = keep * covariance * keep;
+  }
   // Floor: a peaked likelihood puts all the mass on one grid pose; its spread is then below the
   // grid step, not zero.
   const double floor_t = config.sample_step_translation / std::sqrt(12.0);

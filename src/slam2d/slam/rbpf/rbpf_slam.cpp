@@ -125,7 +125,12 @@ bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
     // land in the basin of an old part of the map when a large loop closes.
     const double k = config_.start_noise;
     const Eigen::Vector3d n(rng.gaussian(), rng.gaussian(), rng.gaussian());
-    predicted = predicted * SE2(k * sigmas.x() * n.x(), k * sigmas.y() * n.y(), k * sigmas.z() * n.z());
+    Eigen::Vector3d start(k * sigmas.x() * n.x(), k * sigmas.y() * n.y(), k * sigmas.z() * n.z());
+    // Not along a translation the scan leaves open: no match brings a particle back there.
+    if (const auto open = scan_open_translation(points, config_.proposal.matcher)) {
+      start.head<2>() -= open->dot(start.head<2>()) * *open;
+    }
+    predicted = predicted * SE2(start.x(), start.y(), start.z());
   }
   const ProposalResult proposal = improved_proposal(particle.map, points, predicted, sigmas, config_.proposal);
   double log_factor = 0.0;

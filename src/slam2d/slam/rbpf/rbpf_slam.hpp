@@ -75,9 +75,10 @@ struct RbpfConfig {
   // (reversing logged as forward driving, docs/methods/localization.md) then no longer decides
   // the prediction of a whole update step. One match per scan.
   bool scan_matched_odometry = true;
-  // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight):
-  // weak, since wheel odometry can be wrong by decimetres over one scan. Picked on FR079 and
-  // ACES, not yet checked on a held-out log (docs/defaults.md).
+  // The motion prior's weight in that per-scan matching (RbpfProposalConfig::motion_prior_weight)
+  // when it is not from the learnt motion noise (below): weak, since wheel odometry can be wrong
+  // by decimetres over one scan. Picked on FR079 and ACES; the default until 2026-12-06, when the
+  // hospital world showed what a constant weight costs (docs/defaults.md).
   double scan_odometry_prior_weight = 0.05;
   // Fusion by uncertainty (not in the paper): the per-scan matching's motion prior from the
   // odometry's own uncertainty, in place of the weight above and the fixed motion noise: the
@@ -85,12 +86,13 @@ struct RbpfConfig {
   // (core/motion_fusion.hpp) whose scale is learnt online from how the matches agree with the
   // odometry, under the Cauchy kernel at 2 sigma (Hector's: a scan that shows the odometry many
   // sigmas off wins). A good odometry so holds the match where the scan says little (glass, a
-  // noisy laser), a poor one lets the scan lead. Off by default: over seeds 1-3 it lowers the
-  // error at 10 s under glass, a noisy laser and mixed pixels on Intel and ACES (ACES with glass
-  // 0.078 -> 0.043 m), but Intel's clean loops fail in 5 of 10 filter seeds (0.036-0.057 m over
-  // all relations; the defaults 0.017-0.019 m); ACES over 20 seeds keeps the defaults' odds
-  // (docs/fusion_by_uncertainty.md, "The RBPF's per-scan matching", "Over more seeds").
-  bool scan_odometry_prior_from_motion_noise = false;
+  // noisy laser), a poor one lets the scan lead. On since 2026-12-06: in the simulated hospital
+  // world (modelled on the held-out hospital log) the constant weight let the matches slide near the
+  // door recesses, 0.109 m at 10 s against the odometry's 0.0316 (0.047 with it); over 20 filter
+  // seeds on the clean logs Intel's loops fail about as often with either prior and ACES's less
+  // (docs/methods/rbpf.md, "The per-scan matching weighed by the odometry's noise";
+  // docs/fusion_by_uncertainty.md, "The RBPF's per-scan matching" for the earlier rounds).
+  bool scan_odometry_prior_from_motion_noise = true;
   OdometryNoiseConfig scan_odometry_noise{};
   // With that prior, the odometry's systematic error (a scale of distance, of turn, a heading
   // drift per metre: core/motion_fusion.hpp's OdometryCalibration) learnt from the same matches
@@ -147,7 +149,7 @@ void describe(Fields& f, RbpfConfig& c) {
   f.flag("scan_matched_odometry", c.scan_matched_odometry,
          "match every scan against the best particle's map; the matched motions replace the wheel odometry");
   f.number("scan_odometry_prior_weight", c.scan_odometry_prior_weight, "1", at_least(0),
-           "the motion prior's weight in that per-scan matching");
+           "the motion prior's weight in that per-scan matching, without the learnt motion noise below");
   f.flag("scan_odometry_prior_from_motion_noise", c.scan_odometry_prior_from_motion_noise,
          "that prior from the odometry's learnt motion noise (the exact product, Cauchy kernel) instead of the weight and motion");
   f.section("scan_odometry_noise", c.scan_odometry_noise, "the odometry's motion noise model for it (core/motion_fusion.hpp)");
