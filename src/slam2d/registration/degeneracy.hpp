@@ -77,6 +77,12 @@ ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_or
 /// one's and no depth edge is in view; none otherwise.
 std::optional<Eigen::Vector2d> open_translation(const ScanGeometry& geometry, double ratio);
 
+/// A pose increment (x, y, theta) without its translation along the unit direction w.
+inline Eigen::Vector3d without_translation_along(Eigen::Vector3d increment, const Eigen::Vector2d& w) {
+  increment.head<2>() -= w.dot(increment.head<2>()) * w;
+  return increment;
+}
+
 /// Copies the verdict into a result (degenerate, weak_direction, information_eigenvalues) and, when degenerate, raises the
 /// result's variance along the weak direction w to at least the Cramer-Rao bound 1 / (w^T I w)
 /// and at least the variance along the strongest direction times the eigenvalue ratio (1e6 when

@@ -94,10 +94,7 @@ class OpenTranslation {
  public:
   explicit OpenTranslation(const Eigen::Vector2d& direction_robot) : direction_robot_(direction_robot) {}
   Eigen::Vector3d remove_from(const Eigen::Vector3d& step, double heading) const {
-    const Eigen::Vector2d w = Eigen::Rotation2Dd(heading) * direction_robot_;
-    Eigen::Vector3d shaped = step;
-    shaped.head<2>() -= w.dot(step.head<2>()) * w;
-    return shaped;
+    return without_translation_along(step, Eigen::Rotation2Dd(heading) * direction_robot_);
   }
 
  private:

@@ -10,6 +10,7 @@
 #include "slam2d/core/angles.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/grid/bilinear.hpp"
+#include "slam2d/registration/degeneracy.hpp"
 
 namespace slam2d {
 
@@ -170,9 +171,8 @@ ProposalResult improved_proposal(const MapPyramid& map, const std::vector<Eigen:
   // mean back towards the last viewpoint (the hospital world: 0.46 m lost over 13 m). There the
   // likelihood is read with that part of x_j removed, and the fit keeps x*'s (the prediction's).
   const std::optional<Eigen::Vector2d> open = scan_open_translation(points_robot, config.matcher);
-  const auto observed = [&](Eigen::Vector3d vj) {
-    if (open) vj.head<2>() -= open->dot(vj.head<2>()) * *open;
-    return from_local(result.x_star, vj);
+  const auto observed = [&](const Eigen::Vector3d& vj) {
+    return from_local(result.x_star, open ? without_translation_along(vj, *open) : vj);
   };
   const int k = config.sample_radius;
   const int side = 2 * k + 1;

@@ -17,6 +17,7 @@
 #include "slam2d/core/thread_sanitizer.hpp"
 #include "slam2d/core/resampling.hpp"
 #include "slam2d/optim/robust_kernel.hpp"
+#include "slam2d/registration/degeneracy.hpp"
 #include "slam2d/registration/free_space_check.hpp"
 
 namespace slam2d {
@@ -128,7 +129,7 @@ bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
     Eigen::Vector3d start(k * sigmas.x() * n.x(), k * sigmas.y() * n.y(), k * sigmas.z() * n.z());
     // Not along a translation the scan leaves open: no match brings a particle back there.
     if (const auto open = scan_open_translation(points, config_.proposal.matcher)) {
-      start.head<2>() -= open->dot(start.head<2>()) * *open;
+      start = without_translation_along(start, *open);
     }
     predicted = predicted * SE2(start.x(), start.y(), start.z());
   }
