@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "slam2d/core/error.hpp"
@@ -134,26 +135,39 @@ TEST(OdometryNoiseModel, LearnsItsScaleFromAgreementsDespiteWrongMatches) {
   EXPECT_EQ(fixed.translation_scale(), 1.0);
 }
 
+// One stretch of a wheel odometry that reads its distances `translation_scale` times too short,
+// turns `rotation_scale` times too much and drifts `drift` rad per true metre, measured with noise.
+// Now and then the robot drives backwards, and every twentieth stretch is a slip (or a wrong match).
+struct SimulatedOdometry {
+  double translation_scale = 1.0;
+  double rotation_scale = 1.0;
+  double drift = 0.0;
+  double sigma_xy = 0.01;
+  double sigma_theta = 0.008;
+
+  void observe(Rng& rng, int i, OdometryCalibration& calibration) const {
+    const double direction = i % 7 == 0 ? -1.0 : 1.0;
+    const double path = direction * (0.3 + 0.4 * rng.uniform());  // odometry, signed
+    const double turn = rng.gaussian(0.0, 0.3);                    // odometry
+    const Eigen::Vector2d displacement(path * std::cos(0.5 * turn), path * std::sin(0.5 * turn));
+    const double true_turn = turn / rotation_scale + drift * (translation_scale * path);
+    const Eigen::Vector2d measured =
+        translation_scale * displacement + Eigen::Vector2d(rng.gaussian(0.0, sigma_xy), rng.gaussian(0.0, sigma_xy));
+    double measured_turn = true_turn + rng.gaussian(0.0, sigma_theta);
+    if (i % 20 == 5) measured_turn += 0.3;
+    calibration.observe(turn, path, displacement, measured_turn, measured, 2.0 * sigma_theta * sigma_theta,
+                        2.0 * sigma_xy * sigma_xy);
+  }
+};
+
 // Stretches of a wheel odometry whose distance is 4 % short, whose turns are 3 % long and which
 // turns 0.05 rad per metre it drives (unequal wheels; the other way when it reverses), measured at
 // both ends with noise and one stretch in twenty wrong by a slip: the three errors are found.
 TEST(OdometryCalibration, FindsTheScalesAndTheDriftOfAWheelOdometry) {
   Rng rng(23);
   OdometryCalibration calibration;
-  const double sigma_xy = 0.01;
-  const double sigma_theta = 0.008;
-  for (int i = 0; i < 600; ++i) {
-    const double direction = i % 7 == 0 ? -1.0 : 1.0;                   // now and then backwards
-    const double path = direction * (0.3 + 0.4 * rng.uniform());        // odometry, signed
-    const double turn = rng.gaussian(0.0, 0.3);                          // odometry
-    const Eigen::Vector2d displacement(path * std::cos(0.5 * turn), path * std::sin(0.5 * turn));
-    const double true_turn = turn / 1.03 + 0.05 * (1.04 * path);         // what the robot did
-    Eigen::Vector2d measured = 1.04 * displacement + Eigen::Vector2d(rng.gaussian(0.0, sigma_xy), rng.gaussian(0.0, sigma_xy));
-    double measured_turn = true_turn + rng.gaussian(0.0, sigma_theta);
-    if (i % 20 == 5) measured_turn += 0.3;                               // a slip, or a wrong match
-    calibration.observe(turn, path, displacement, measured_turn, measured, 2.0 * sigma_theta * sigma_theta,
-                        2.0 * sigma_xy * sigma_xy);
-  }
+  const SimulatedOdometry odometry{.translation_scale = 1.04, .rotation_scale = 1.03, .drift = 0.05};
+  for (int i = 0; i < 600; ++i) odometry.observe(rng, i, calibration);
   EXPECT_EQ(calibration.observations(), 600u);
   EXPECT_NEAR(calibration.translation_scale(), 1.04, 0.005);
   EXPECT_NEAR(calibration.rotation_scale(), 1.0 / 1.03, 0.01);
@@ -167,6 +181,39 @@ TEST(OdometryCalibration, FindsTheScalesAndTheDriftOfAWheelOdometry) {
     const SE2 robot(1.04 * path * std::cos(0.5 * true_turn), 1.04 * path * std::sin(0.5 * true_turn), true_turn);
     EXPECT_LT(motion_difference(calibration.corrected(read), robot).cwiseAbs().maxCoeff(), 0.008) << path;
   }
+}
+
+// Only what stands out of the fit's own uncertainty is corrected. An odometry without systematic
+// error: its fit still finds some in the noise of 100 stretches, but none of it is corrected, and
+// an increment passes unchanged. One with a large error: corrected nearly whole (the garrote keeps
+// 1 - 1/m^2 of an estimate m times its threshold).
+TEST(OdometryCalibration, CorrectsOnlyTheErrorThatStandsOutOfItsUncertainty) {
+  const OdometryCalibrationConfig config{.window = 1000.0, .significance = 5.0};  // graph SLAM's tracker's
+  bool found_some = false;  // whether the raw fit, uncorrected, found an error in the noise
+  for (const std::uint64_t seed : {1u, 2u, 3u, 4u, 5u}) {
+    Rng rng(seed);
+    OdometryCalibration exact(config);
+    OdometryCalibration raw(OdometryCalibrationConfig{.window = 1000.0});  // the fit as it is
+    Rng twin(seed);
+    for (int i = 0; i < 100; ++i) {
+      SimulatedOdometry{}.observe(rng, i, exact);
+      SimulatedOdometry{}.observe(twin, i, raw);
+    }
+    EXPECT_EQ(exact.translation_scale(), 1.0) << seed;
+    EXPECT_EQ(exact.rotation_scale(), 1.0) << seed;
+    EXPECT_EQ(exact.drift_per_metre(), 0.0) << seed;
+    const SE2 increment(0.4, 0.02, 0.1);
+    EXPECT_LT(motion_difference(exact.corrected(increment), increment).norm(), 1e-15) << seed;
+    found_some = found_some || std::abs(raw.translation_scale() - 1.0) > 1e-3 || std::abs(raw.drift_per_metre()) > 1e-3;
+  }
+  EXPECT_TRUE(found_some);
+  Rng rng(7);
+  OdometryCalibration wheel(config);
+  const SimulatedOdometry odometry{.translation_scale = 1.04, .rotation_scale = 1.03, .drift = 0.05};
+  for (int i = 0; i < 1000; ++i) odometry.observe(rng, i, wheel);
+  EXPECT_NEAR(wheel.translation_scale(), 1.04, 0.003);
+  EXPECT_NEAR(wheel.rotation_scale(), 1.0 / 1.03, 0.006);
+  EXPECT_NEAR(wheel.drift_per_metre(), 0.05 * 1.04, 0.004);
 }
 
 // The stretch a calibration compares: the increments composed, their signed turn and their signed

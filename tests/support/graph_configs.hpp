@@ -20,4 +20,14 @@ inline GraphSlamConfig graph_with_fixed_tracker_prior() {
   return config;
 }
 
+/// Graph SLAM's defaults without the tracker's correction of the odometry's systematic error (the
+/// defaults before 2026-12-07). The tests whose odometry errs on purpose (a heading bias that makes
+/// a drift, a fault or a gap that trips a mechanism) compare that mechanism with and without on
+/// these: the calibration takes a simulated bias out, and on the real logs it changes which runs
+/// a fault trips, so it would decide the comparison instead of the mechanism.
+inline GraphSlamConfig graph_without_calibration(GraphSlamConfig config = {}) {
+  config.tracking.odometry_calibration.window = 0.0;
+  return config;
+}
+
 }  // namespace slam2d::test

@@ -56,6 +56,22 @@ double robust_weight(double residual, double variance) {
   return r2 > 9.0 * variance ? 9.0 * variance / r2 : 1.0;
 }
 
+// The non-negative garrote (L. Breiman, "Better subset regression using the nonnegative garrote",
+// Technometrics 1995, in its orthogonal form): zero within `threshold`, shrunk by the factor
+// 1 - (threshold / estimate)^2 beyond it, so an error far out of its uncertainty is corrected
+// nearly whole and one near it hardly at all.
+double garrote(double estimate, double threshold) {
+  if (!(std::abs(estimate) > threshold)) return 0.0;
+  const double ratio = threshold / estimate;
+  return estimate * (1.0 - ratio * ratio);
+}
+
+// The fit's variance from its information, scaled up by the residuals' chi^2 per observation (each
+// stretch's against the fit before it) where the given variances understate the scatter.
+double fit_variance(double inverse_information, double chi2, double count) {
+  return inverse_information * std::max(1.0, count > 0.0 ? chi2 / count : 1.0);
+}
+
 }  // namespace
 
 void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2d& displacement, double measured_rotation,
@@ -76,10 +92,19 @@ void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2
   // metre measured, the translation scale times that per metre of the odometry's.
   const Eigen::Vector2d h(measured_rotation, std::copysign(measured_displacement.norm(), path));
   const double e = normalize_angle(measured_rotation - turn);
-  const double w = robust_weight(e - h.dot(rotation_), rotation_variance) / rotation_variance;
+  const double r = e - h.dot(rotation_);
+  const double w = robust_weight(r, rotation_variance) / rotation_variance;
   rotation_information_ = keep * rotation_information_ + w * h * h.transpose();
   rotation_vector_ = keep * rotation_vector_ + w * e * h;
-  rotation_ = (rotation_information_ + prior * Eigen::Matrix2d::Identity()).ldlt().solve(rotation_vector_);
+  rotation_chi2_ = keep * rotation_chi2_ + w * r * r;
+  rotation_count_ = keep * rotation_count_ + 1.0;
+  const Eigen::Matrix2d normal = rotation_information_ + prior * Eigen::Matrix2d::Identity();
+  rotation_ = normal.ldlt().solve(rotation_vector_);
+  const Eigen::Matrix2d inverse = normal.inverse();
+  for (int i = 0; i < 2; ++i) {
+    const double sigma = std::sqrt(fit_variance(inverse(i, i), rotation_chi2_, rotation_count_));
+    applied_rotation_(i) = garrote(rotation_(i), config_.significance * sigma);
+  }
   // Translation: the measured length m = scale * the odometry's displacement along the measured
   // one, l; m - l = c * m, scale = 1 / (1 - c). Along the measured direction, not the odometry's
   // length: a jitter of the odometry across its path would lengthen that, never shorten it.
@@ -87,22 +112,27 @@ void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2
   if (measured_length < config_.min_distance) return;
   const double along = displacement.dot(measured_displacement) / measured_length;
   const double et = measured_length - along;
-  const double wt = robust_weight(et - measured_length * translation_, translation_variance) / translation_variance;
+  const double rt = et - measured_length * translation_;
+  const double wt = robust_weight(rt, translation_variance) / translation_variance;
   translation_information_ = keep * translation_information_ + wt * measured_length * measured_length;
   translation_vector_ = keep * translation_vector_ + wt * et * measured_length;
+  translation_chi2_ = keep * translation_chi2_ + wt * rt * rt;
+  translation_count_ = keep * translation_count_ + 1.0;
   translation_ = translation_vector_ / (translation_information_ + prior);
+  const double sigma = std::sqrt(fit_variance(1.0 / (translation_information_ + prior), translation_chi2_, translation_count_));
+  applied_translation_ = garrote(translation_, config_.significance * sigma);
 }
 
 double OdometryCalibration::translation_scale() const {
-  return std::clamp(1.0 / (1.0 - translation_), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
+  return std::clamp(1.0 / (1.0 - applied_translation_), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
 }
 
 double OdometryCalibration::rotation_scale() const {
-  return std::clamp(1.0 / (1.0 - rotation_.x()), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
+  return std::clamp(1.0 / (1.0 - applied_rotation_.x()), 1.0 - config_.max_correction, 1.0 + config_.max_correction);
 }
 
 double OdometryCalibration::drift_per_metre() const {
-  return std::clamp(translation_scale() * rotation_.y() / (1.0 - rotation_.x()), -config_.max_correction,
+  return std::clamp(translation_scale() * applied_rotation_.y() / (1.0 - applied_rotation_.x()), -config_.max_correction,
                     config_.max_correction);
 }
 

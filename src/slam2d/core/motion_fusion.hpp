@@ -100,12 +100,18 @@ class NoiseScaleEstimate {
 /// beyond 3 sigma of the current fit weighs (3 sigma / residual)^2 as much (a slip, a wrong match).
 /// Corrected: distance times translation_scale, turn times rotation_scale plus
 /// drift_per_metre times the distance; nothing while the fit lies beyond max_correction on any of
-/// the three (credible()), which no wheel odometry's systematic error reaches.
+/// the three (credible()), which no wheel odometry's systematic error reaches. Each of the three is
+/// corrected only by what of it stands out of its own uncertainty: the fit's standard error (from
+/// the normal equations, scaled up by the residuals' chi^2 per stretch where that is above 1), the
+/// estimate shrunk by the non-negative garrote at `significance` of it (none within it, nearly all
+/// far beyond it). With it, an odometry with no systematic error to speak of has none corrected,
+/// whatever small error the matches' own errors suggest.
 struct OdometryCalibrationConfig {
   double window = 100.0;        // stretches the estimate forgets over; 0: no correction
   double prior_sigma = 0.05;    // 1 and rad/m, the ridge prior of each parameter at zero
   double max_correction = 0.2;  // 1 and rad/m, the largest scale error and drift believed (beyond: none corrected)
   double min_distance = 0.2;    // m, shorter displacements teach no translation scale
+  double significance = 0.0;    // standard errors each estimate must stand out by (0: the fit as it is)
 };
 
 template <typename Fields>
@@ -115,6 +121,8 @@ void describe(Fields& f, OdometryCalibrationConfig& c) {
   f.number("max_correction", c.max_correction, "1", between(0, 0.5),
            "largest scale error, and drift in rad/m, believed; a fit beyond it on any of the three corrects nothing");
   f.number("min_distance", c.min_distance, "m", greater_than(0), "stretches that move less teach no translation scale");
+  f.number("significance", c.significance, "1", at_least(0),
+           "standard errors of its fit each error must exceed to be corrected; beyond, shrunk by the garrote (0: the fit as it is)");
 }
 
 class OdometryCalibration {
@@ -128,6 +136,7 @@ class OdometryCalibration {
   void observe(double turn, double path, const Eigen::Vector2d& displacement, double measured_rotation,
                const Eigen::Vector2d& measured_displacement, double rotation_variance, double translation_variance);
 
+  // What is corrected: the fit, each error shrunk at `significance` (the fit itself with 0).
   double translation_scale() const;  // true distance / the odometry's
   double rotation_scale() const;     // true turn / the odometry's, less the drift
   double drift_per_metre() const;    // rad per metre of the odometry's (signed) path
@@ -149,6 +158,11 @@ class OdometryCalibration {
   double translation_vector_ = 0.0;
   Eigen::Vector2d rotation_ = Eigen::Vector2d::Zero();  // the fit (a, b), in observe()
   double translation_ = 0.0;                            // c
+  // The residuals' weighted squares and count, forgetting alike: chi^2 per stretch.
+  double rotation_chi2_ = 0.0, rotation_count_ = 0.0;
+  double translation_chi2_ = 0.0, translation_count_ = 0.0;
+  Eigen::Vector2d applied_rotation_ = Eigen::Vector2d::Zero();  // (a, b) shrunk at significance
+  double applied_translation_ = 0.0;                            // c, the same
   std::size_t observations_ = 0;
 };
 
