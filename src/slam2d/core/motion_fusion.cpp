@@ -66,12 +66,6 @@ double garrote(double estimate, double threshold) {
   return estimate * (1.0 - ratio * ratio);
 }
 
-// The fit's variance from its information, scaled up by the residuals' chi^2 per observation (each
-// stretch's against the fit before it) where the given variances understate the scatter.
-double fit_variance(double inverse_information, double chi2, double count) {
-  return inverse_information * std::max(1.0, count > 0.0 ? chi2 / count : 1.0);
-}
-
 }  // namespace
 
 void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2d& displacement, double measured_rotation,
@@ -96,13 +90,12 @@ void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2
   const double w = robust_weight(r, rotation_variance) / rotation_variance;
   rotation_information_ = keep * rotation_information_ + w * h * h.transpose();
   rotation_vector_ = keep * rotation_vector_ + w * e * h;
-  rotation_chi2_ = keep * rotation_chi2_ + w * r * r;
-  rotation_count_ = keep * rotation_count_ + 1.0;
+  rotation_scatter_.add(keep, w * r * r);
   const Eigen::Matrix2d normal = rotation_information_ + prior * Eigen::Matrix2d::Identity();
   rotation_ = normal.ldlt().solve(rotation_vector_);
   const Eigen::Matrix2d inverse = normal.inverse();
   for (int i = 0; i < 2; ++i) {
-    const double sigma = std::sqrt(fit_variance(inverse(i, i), rotation_chi2_, rotation_count_));
+    const double sigma = std::sqrt(rotation_scatter_.variance(inverse(i, i)));
     applied_rotation_(i) = garrote(rotation_(i), config_.significance * sigma);
   }
   // Translation: the measured length m = scale * the odometry's displacement along the measured
@@ -116,10 +109,9 @@ void OdometryCalibration::observe(double turn, double path, const Eigen::Vector2
   const double wt = robust_weight(rt, translation_variance) / translation_variance;
   translation_information_ = keep * translation_information_ + wt * measured_length * measured_length;
   translation_vector_ = keep * translation_vector_ + wt * et * measured_length;
-  translation_chi2_ = keep * translation_chi2_ + wt * rt * rt;
-  translation_count_ = keep * translation_count_ + 1.0;
+  translation_scatter_.add(keep, wt * rt * rt);
   translation_ = translation_vector_ / (translation_information_ + prior);
-  const double sigma = std::sqrt(fit_variance(1.0 / (translation_information_ + prior), translation_chi2_, translation_count_));
+  const double sigma = std::sqrt(translation_scatter_.variance(1.0 / (translation_information_ + prior)));
   applied_translation_ = garrote(translation_, config_.significance * sigma);
 }
 

@@ -24,6 +24,7 @@
 // Increments are small (scan to scan, keyframe to scan): they are fused in their coordinates
 // (x, y, theta), the heading's difference wrapped.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 
@@ -158,9 +159,20 @@ class OdometryCalibration {
   double translation_vector_ = 0.0;
   Eigen::Vector2d rotation_ = Eigen::Vector2d::Zero();  // the fit (a, b), in observe()
   double translation_ = 0.0;                            // c
-  // The residuals' weighted squares and count, forgetting alike: chi^2 per stretch.
-  double rotation_chi2_ = 0.0, rotation_count_ = 0.0;
-  double translation_chi2_ = 0.0, translation_count_ = 0.0;
+  // The residuals' weighted squares and count, forgetting alike: chi^2 per stretch, by which the
+  // fit's variance from its information is scaled up where the given variances understate the
+  // scatter.
+  struct Scatter {
+    double chi2 = 0.0, count = 0.0;
+    void add(double keep, double weighted_square) {
+      chi2 = keep * chi2 + weighted_square;
+      count = keep * count + 1.0;
+    }
+    double variance(double inverse_information) const {
+      return inverse_information * std::max(1.0, count > 0.0 ? chi2 / count : 1.0);
+    }
+  };
+  Scatter rotation_scatter_, translation_scatter_;
   Eigen::Vector2d applied_rotation_ = Eigen::Vector2d::Zero();  // (a, b) shrunk at significance
   double applied_translation_ = 0.0;                            // c, the same
   std::size_t observations_ = 0;
