@@ -263,8 +263,12 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   GraphSlamConfig config = read_method_preset(options.config, "graph", GraphSlamConfig{});
   // As the RBPF's below: Hector's poses (hector+graph, --odometry-source hector) come from the same
   // scans as the tracker's matches, so how well the two agree says nothing of their noise (ACES's
-  // hector+graph: 0.110 m over all relations with the learnt prior, 0.057 m with the fixed one).
-  if (!feed.is_own_sensor()) config.tracking.prior_from_motion_noise = false;
+  // hector+graph: 0.110 m over all relations with the learnt prior, 0.057 m with the fixed one);
+  // nor has it a systematic error of its own for the calibration to learn.
+  if (!feed.is_own_sensor()) {
+    config.tracking.prior_from_motion_noise = false;
+    config.tracking.odometry_calibration.window = 0.0;
+  }
   if (options.resolution) config.map_resolution = *options.resolution;
   GraphSlam slam(config);
   MappingRun run = run_over_scans(options, feed, "graph", [&](const LaserMessage& laser, const std::optional<SE2>& odometry) {

@@ -157,6 +157,19 @@ TEST_F(PipelineCli, TheLearntOdometryPriorIsForAnOdometryOfItsOwn) {
   EXPECT_EQ(fixed.output.find("odometry_calibration"), std::string::npos) << fixed.output;
 }
 
+// The same for graph SLAM's tracker, whose calibration is on by default: it learns the wheel
+// odometry's systematic error, and Hector's poses, which have none of their own, teach it nothing.
+TEST_F(PipelineCli, TheTrackersCalibrationIsForAnOdometryOfItsOwn) {
+  TempDir wheel;
+  const CommandResult learnt = map(wheel, "--method graph");
+  ASSERT_EQ(learnt.exit_code, 0) << learnt.errors;
+  EXPECT_GT(json_number(learnt.output, "odometry_calibration_stretches").value_or(0.0), 10.0) << learnt.output;
+  TempDir chain;
+  const CommandResult fixed = map(chain, "--method hector+graph");
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.errors;
+  EXPECT_EQ(fixed.output.find("odometry_calibration"), std::string::npos) << fixed.output;
+}
+
 TEST_F(PipelineCli, WhatCannotBeDoneIsRefusedWithoutOutput) {
   for (const std::string& arguments :
        {std::string("--method graph --odometry-source /nonexistent/odometry.txt"), std::string("--method graph --scan-rate 0"),

@@ -156,13 +156,15 @@ void HectorSlam::fuse(HectorStep& step) {
   const bool known = match.covariance.diagonal().maxCoeff() < kUnknownVariance;
   if (known) step.covariance = match.covariance;
   residual_variance_ = step.match.residual * step.match.residual;
-  const bool learns = config_.fuse_odometry || config_.prior_from_motion_noise;
-  const bool usable = learns && config_.prior == MotionPrior::kOdometry && odometry_.trusted() && known;
+  // A trusted increment and a match that knows its pose: a measurement of the odometry's motion,
+  // for its systematic error under any prior (the stretches' weights from the noise model, learnt
+  // or not) and for its noise where that is learnt.
+  const bool usable = config_.prior == MotionPrior::kOdometry && odometry_.trusted() && known;
   if (calibrating()) {
     calibration_stretches_.add(usable, odometry_.increment, odometry_noise_.covariance(odometry_.increment), match.value,
                                match.covariance, odometry_calibration_);
   }
-  if (!usable) return;
+  if (!usable || !(config_.fuse_odometry || config_.prior_from_motion_noise)) return;
   const Covariance3 predicted = predicted_covariance();
   // The odometry's noise is learnt from the match's motion since the last pose, whose uncertainty
   // is the two poses' (the last one's already counted in the prediction); what the calibration

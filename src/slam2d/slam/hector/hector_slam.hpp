@@ -130,21 +130,20 @@ struct HectorSlamConfig {
   // Off by default: see docs/methods/hector.md, "Fusion by uncertainty".
   bool fuse_odometry = false;
   OdometryNoiseConfig odometry_noise{};
-  // With the prior from the motion noise or the fusion: the odometry's systematic error (a scale
-  // of distance, of turn, a heading drift per metre: core/motion_fusion.hpp's OdometryCalibration)
-  // learnt from the matches over stretches of half a metre, and each trusted increment corrected
-  // before it predicts (the stretches: core/motion_fusion.hpp's CalibrationStretches, as the
-  // RBPF's). The noise model describes noise; without this a wheel odometry that turns the same
-  // way every metre (Intel's, 0.06 rad/m) pulls the match along its drift. Off by default: on
-  // graph SLAM's tracker over 1000 stretches it lowers Intel (0.0198 -> 0.0179 m), FR079 (0.0394
-  // -> 0.0380 m) and the eight corrected logs with their degraded odometry (ATE -19 %, RPE -13 %
-  // in the geometric mean), but ACES, whose odometry has little to correct, loses a loop in two
-  // runs of four (0.0381 -> 0.0413 m clean); over 100 stretches the fit follows the heavy-tailed
-  // errors of an odometry shifted in time (Intel 0.3 s ahead 0.06 -> 1.2 m):
-  // docs/fusion_by_uncertainty.md, "The odometry's systematic error in the tracker". With Hector's
-  // weighed prior and retry, over 100 stretches it mends Edmonton's degraded odometry (1.39 ->
+  // The odometry's systematic error (a scale of distance, of turn, a heading drift per metre:
+  // core/motion_fusion.hpp's OdometryCalibration) learnt from the matches over stretches of half a
+  // metre, and each trusted increment corrected before it predicts (the stretches:
+  // core/motion_fusion.hpp's CalibrationStretches, as the RBPF's), under any odometry prior (until
+  // 2026-12-07 only with the weighed prior or the fusion; under the constant one the stretches are
+  // weighed by the noise model unscaled). The noise model describes noise; without this a wheel
+  // odometry that turns the same way every metre (Intel's, 0.06 rad/m) pulls the match along its
+  // drift. On in graph SLAM's tracker (graph_slam.cpp's default_tracking_config: 1000 stretches,
+  // significance 5; docs/fusion_by_uncertainty.md, "Only what stands out"). Off in Hector: with
+  // its weighed prior and retry, over 100 stretches it mends Edmonton's degraded odometry (1.39 ->
   // 0.64 m ATE) but loses ACES's loop (0.045 -> 0.097 m, with a 198 s gap 0.15 m), over 1000
-  // FHW's (0.20 -> 2.79 m): docs/fusion_by_uncertainty.md, "Hector weighing its odometry".
+  // FHW's (0.20 -> 2.79 m): docs/fusion_by_uncertainty.md, "Hector weighing its odometry"; under
+  // its constant prior, with the open axis, it holds the hospital world but loses Intel under a
+  // noisy laser: docs/methods/hector.md, "The odometry's systematic error under Hector's own prior".
   OdometryCalibrationConfig odometry_calibration{.window = 0.0};
   MatchNoiseConfig match_noise{.floor_translation = 0.0, .floor_rotation = 0.0};
   double fusion_gate = kMotionGateChi2;
@@ -190,7 +189,7 @@ void describe(Fields& f, HectorSlamConfig& c) {
   f.flag("fuse_odometry", c.fuse_odometry, "fuse each match with the odometry's prediction by their covariances");
   f.section("odometry_noise", c.odometry_noise, "the odometry's motion noise model (core/motion_fusion.hpp)");
   f.section("odometry_calibration", c.odometry_calibration,
-            "with the prior from the motion noise or the fusion, the odometry's systematic error learnt and corrected (window 0: off)");
+            "the odometry's systematic error learnt from the matches and corrected before it predicts (window 0: off)");
   f.section("match_noise", c.match_noise, "the match's covariance for the fusion (registration/match_fusion.hpp)");
   f.number("fusion_gate", c.fusion_gate, "1", greater_than(0),
            "chi-square (3 dof) beyond which prediction and match disagree and the better-conditioned one wins");
@@ -249,7 +248,7 @@ class HectorSlam {
   const OdometryCalibration& odometry_calibration() const { return odometry_calibration_; }
   /// The odometry's systematic error is learnt and corrected (config.odometry_calibration).
   bool calibrating() const {
-    return (config_.prior_from_motion_noise || config_.fuse_odometry) && config_.odometry_calibration.window > 0.0;
+    return config_.odometry_calibration.window > 0.0;
   }
 
  private:
