@@ -166,5 +166,26 @@ TEST(ScanGeometry, ADoorFrameIsAnEdgeAndAGrazingWallSampledSparselyIsNot) {
   EXPECT_EQ(scan_geometry(mixed).edges, 1u);
 }
 
+TEST(ScanGeometry, ItsOpenTranslationIsJudgedWhereTheSurfacesHoldTheScan) {
+  // The corridor: its axis open (the far walls' lone dots are a tenth of the returns).
+  const std::vector<Eigen::Vector2d> corridor = corridor_points();
+  const ScanGeometry plain = scan_geometry(corridor);
+  ASSERT_LT(4 * plain.lone_returns, plain.returns);
+  const std::optional<Eigen::Vector2d> open = open_translation(plain, 0.01);
+  ASSERT_TRUE(open.has_value());
+  EXPECT_GT(std::abs(open->x()), 0.999);
+  // A stretch of hedge and trunks beyond it, one return each: the hedge alone leaves its line
+  // open, the trunks fix it, and lone returns are not taken for noise when they are most of the scan.
+  std::vector<Eigen::Vector2d> hedge;
+  for (int k = 0; k <= 10; ++k) hedge.emplace_back(-1.0 + 0.2 * k, 4.0);
+  for (int k = 0; k < 12; ++k) hedge.emplace_back(8.0 + 1.5 * k, -6.0 + (k % 3) * 4.0);
+  const ScanGeometry outdoors = scan_geometry(hedge);
+  EXPECT_EQ(outdoors.lone_returns, 12u);
+  EXPECT_EQ(outdoors.returns, 23u);
+  EXPECT_FALSE(open_translation(outdoors, 0.01).has_value());
+  hedge.resize(11 + 3);  // three trunks: a fifth of the returns, the hedge judged
+  EXPECT_TRUE(open_translation(scan_geometry(hedge), 0.01).has_value());
+}
+
 }  // namespace
 }  // namespace slam2d

@@ -130,10 +130,14 @@ ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_or
   }
   const auto surface = [&](const std::pair<std::size_t, std::size_t>& run) { return run.second - run.first + 1 >= kMinSurface; };
   ScanGeometry geometry;
+  geometry.returns = p.size();
   FisherInformation information(config);
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const auto [first, last] = runs[r];
-    if (!surface(runs[r])) continue;
+    if (!surface(runs[r])) {
+      geometry.lone_returns += last - first + 1;
+      continue;
+    }
     // Each point against the chord through its neighbours up to kReach beams either side (a
     // total least squares fit over them gives nearly the same line and costs ten times as much).
     for (std::size_t i = first; i <= last; ++i) {
@@ -156,8 +160,10 @@ ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_or
 }
 
 std::optional<Eigen::Vector2d> open_translation(const ScanGeometry& geometry, double ratio) {
+  constexpr double kMaxLoneShare = 0.25;  // of the returns (the header)
   const Eigen::Matrix3d& information = geometry.information;
   if (geometry.edges > 0 || !(information(2, 2) > 0.0)) return std::nullopt;
+  if (static_cast<double>(geometry.lone_returns) > kMaxLoneShare * static_cast<double>(geometry.returns)) return std::nullopt;
   const Eigen::Matrix2d t =
       information.topLeftCorner<2, 2>() - information.block<2, 1>(0, 2) * information.block<1, 2>(2, 0) / information(2, 2);
   // The eigenvalues of the symmetric 2 x 2 matrix in closed form, and the weak one's eigenvector.
