@@ -77,8 +77,8 @@ namespace slam2d {
 /// corridor's axis) at the odometry, and the same for the translation the scan's own geometry leaves
 /// open (HectorMatcherConfig::scan_degeneracy_ratio 0.01, as the RBPF's proposal: a corridor with
 /// no edge within range, where the map's dots of its far walls would pin the scan; the simulated
-/// hospital world's 24 m corridors, 10 s RPE 0.029-0.069 -> 0.017-0.030 m against the odometry's
-/// 0.030-0.032, docs/methods/graph_slam.md). Until the first match, and where the odometry is not a sensor
+/// hospital world's 24 m corridors, 10 s RPE 0.025-0.069 -> 0.016-0.030 m against the odometry's
+/// 0.030-0.033, docs/methods/graph_slam.md). Until the first match, and where the odometry is not a sensor
 /// of its own (Hector's poses: map_job), the prior is the fixed weak one (sigma 0.1 m, 0.058 rad).
 /// Each trusted increment is corrected for the odometry's systematic error (distance and turn
 /// scales, heading drift per metre) learnt from the tracker's matches over 1000 stretches of half a
