@@ -200,10 +200,11 @@ void add_wall(PointCloud2& cloud, const Eigen::Vector2d& from, const Eigen::Vect
 // The hospital world's false closure (bench/BENCHMARKS.md, "A wall seen from its far side"): the map
 // holds a corner, two walls seen from the corridor in front of them; a scan taken behind the corner
 // shows an L of the same two walls, which fits the corner point for point. Its points see the walls
-// from their far side (their normals, facing the scan's sensor, turn away from the map's), so the
-// match counts no inlier; the same points seen from the front are inliers, and without normals
-// nothing is judged. A few points turned away (noisy normals) do not decide it.
-TEST(CorrelativeMapMatch, AScanSeeingTheMapFromBehindCountsNoInlier) {
+// from their far side (their normals, facing the scan's sensor, turn away from the map's): the match
+// is seen from behind, its points inliers all the same (the loop closer weighs it); the same points
+// seen from the front are not, and without normals nothing is judged. A few points turned away
+// (noisy normals) do not decide it.
+TEST(CorrelativeMapMatch, TellsAScanSeeingTheMapFromBehind) {
   PointCloud2 map_cloud;  // seen from the corridor below and left of the corner at (1.2, 1.2)
   add_wall(map_cloud, {1.2, 1.2}, {8.0, 1.2}, {0.0, -1.0});
   add_wall(map_cloud, {1.2, 1.2}, {1.2, 6.0}, {-1.0, 0.0});
@@ -226,12 +227,17 @@ TEST(CorrelativeMapMatch, AScanSeeingTheMapFromBehindCountsNoInlier) {
   const MatchResult without_normals = match_correlative_map(map, unjudged, behind, config);
   ASSERT_TRUE(back.converged);
   EXPECT_LT((back.T_target_source.translation() - behind.translation()).norm(), 0.05);  // it fits
-  EXPECT_LT(back.inlier_fraction, 0.05);
+  EXPECT_TRUE(back.seen_from_behind);
+  EXPECT_GT(back.inlier_fraction, 0.95);
+  EXPECT_FALSE(front.seen_from_behind);
   EXPECT_GT(front.inlier_fraction, 0.95);
+  EXPECT_FALSE(without_normals.seen_from_behind);
   EXPECT_GT(without_normals.inlier_fraction, 0.95);
   PointCloud2 noisy = from_front;  // every third normal turned away
   for (std::size_t n = 0; n < noisy.size(); n += 3) noisy.normals[n] = -noisy.normals[n];
-  EXPECT_GT(match_correlative_map(map, noisy, in_front, config).inlier_fraction, 0.95);
+  const MatchResult noisy_front = match_correlative_map(map, noisy, in_front, config);
+  EXPECT_FALSE(noisy_front.seen_from_behind);
+  EXPECT_GT(noisy_front.inlier_fraction, 0.95);
 }
 
 TEST(MatchResult, InformationIsTheInverseCovarianceAndZeroWhenUnknown) {

@@ -30,20 +30,26 @@ Covariance3 floored(const Covariance3& covariance, const MapMatchConfig& config)
   return make_positive_definite(result, 1e-3 * std::min(floor_xy, floor_theta));
 }
 
-// The scan's points within `distance` of a map point at the pose; none when most of them see the
+// The scan's points within `distance` of a map point at the pose, and whether most of them see the
 // map from behind. Both clouds' normals face their sensors (registration/normals.hpp): a point
 // whose normal turns away from its map point's lies on the wall's far side, and a scan that fits
-// walls from behind them fits only at a wrong place (an L of two walls matched onto a corner from
-// beyond it; a room's inner walls onto the corridor's faces of the same thin walls). One point's
-// normal is a fit of a few noisy neighbours: with 10 cm of range noise a right match's inliers
-// turn away by more than 90 degrees in 30 % of the points and by more than 120 in 18 %. So a
-// point turns away when its normal and its map point's are more than 120 degrees apart, and the
-// match is behind when more than half of the inliers whose point and map point carry normals do.
-// Without normals (zero, or a cloud without them) nothing is judged.
+// walls from behind them fits either at a wrong place (an L of two walls matched onto a corner from
+// beyond it) or where the map holds only one face of a thin wall (a room's inner walls onto the
+// corridor's faces of the same walls): the caller weighs which (slam/graph/loop_closure.hpp). One
+// point's normal is a fit of a few noisy neighbours: with 10 cm of range noise a right match's
+// inliers turn away by more than 90 degrees in 30 % of the points and by more than 120 in 18 %. So
+// a point turns away when its normal and its map point's are more than 120 degrees apart, and the
+// match is seen from behind when more than half of the inliers whose point and map point carry
+// normals do. Without normals (zero, or a cloud without them) nothing is judged.
 constexpr double kTurnedAway = -0.5;  // cos 120 deg
 
-std::size_t count_inliers(const KdTree2& map, const PointCloud2& map_cloud, const PointCloud2& scan,
-                          const SE2& T_map_robot, double distance) {
+struct Inliers {
+  std::size_t count = 0;
+  bool seen_from_behind = false;
+};
+
+Inliers count_inliers(const KdTree2& map, const PointCloud2& map_cloud, const PointCloud2& scan,
+                      const SE2& T_map_robot, double distance) {
   const Eigen::Matrix2d R = T_map_robot.rotation();
   std::size_t inliers = 0, judged = 0, turned_away = 0;
   for (std::size_t n = 0; n < scan.size(); ++n) {
@@ -54,7 +60,7 @@ std::size_t count_inliers(const KdTree2& map, const PointCloud2& map_cloud, cons
     ++judged;
     if ((R * scan.normals[n]).dot(map_cloud.normals[nearest.index]) < kTurnedAway) ++turned_away;
   }
-  return 2 * turned_away > judged ? 0 : inliers;
+  return {.count = inliers, .seen_from_behind = 2 * turned_away > judged};
 }
 
 }  // namespace
@@ -94,7 +100,9 @@ MatchResult match_correlative_map(const MatchMap& map, const PointCloud2& scan, 
       result.residual = fine.residual;
     }
   }
-  result.inliers = count_inliers(map.grid.tree(), map.cloud, scan, result.T_target_source, config.inlier_distance);
+  const Inliers inliers = count_inliers(map.grid.tree(), map.cloud, scan, result.T_target_source, config.inlier_distance);
+  result.inliers = inliers.count;
+  result.seen_from_behind = inliers.seen_from_behind;
   result.inlier_fraction = static_cast<double>(result.inliers) / static_cast<double>(scan.size());
   return result;
 }

@@ -15,10 +15,11 @@
 // with refine, the refinement converged within max_refinement_shift (when only the refinement
 // fails: converged = false with the search's pose and covariance); score: the search's share of
 // the scan on the table's occupied cells; inliers / inlier_fraction: scan points within
-// inlier_distance of a map point at the estimate, none when the scan sees the map from behind
-// (where both clouds carry normals, which face their sensors: more than half of those points'
-// normals turn more than 120 degrees away from their map points'; a wall's far side, an L of walls
-// fitted onto a corner from beyond it); degenerate / weak_direction: the search's.
+// inlier_distance of a map point at the estimate; seen_from_behind: the scan sees the map from
+// behind (where both clouds carry normals, which face their sensors: more than half of the inliers'
+// normals turn more than 120 degrees away from their map points'; an L of walls fitted onto a
+// corner from beyond it, or a thin wall's other face where the map holds only one); degenerate /
+// weak_direction: the search's.
 //
 // Loop closure matches a keyframe against a chain of old keyframes over a large window
 // (slam/graph/loop_closure.hpp).

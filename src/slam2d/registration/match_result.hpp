@@ -34,6 +34,8 @@ struct MatchResult {
   Eigen::Vector3d information_eigenvalues = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   // Map matchers (scan to map; 0 from the scan-to-scan matchers):
   double inlier_fraction = 0.0; // 1, in [0, 1]: inliers / the points offered (the matcher's own inlier test)
+  bool seen_from_behind = false;  // most inliers see the map's surfaces from their far side (where both
+                                  // clouds carry normals: correlative_map_match.hpp)
   double score = 0.0;           // 1, in [0, 1]: a search method's response at its best pose (correlative: the
                                 // share of the points on the table's occupied cells); 0 from least squares
   double cost = 0.0;            // the objective minimised, at the estimate, in the matcher's units (Hector:

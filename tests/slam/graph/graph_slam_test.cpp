@@ -108,8 +108,8 @@ TEST(GraphSlam, TracksAlongTheCorridorWithTheOdometry) {
 // corridor to the corner it started from, whose first scans saw the corner's two walls from the
 // main corridor. Its scan shows the other corner of the junction, an L that fits the mapped corner
 // from behind it, 3.4 m off: that closure bent the map to 1.19 m ATE, worse than the odometry it
-// was given (0.83 m). A match whose scan sees the map's walls from behind counts no inlier
-// (correlative_map_match.hpp).
+// was given (0.83 m). A large correction whose scan sees the map's walls from behind is refused
+// (slam/graph/loop_closure.hpp).
 TEST(GraphSlam, ClosesNoLoopOntoACornerSeenFromBehindIt) {
   const SimulatedRun run = simulate(test::hospital_simulation(600.0));
   GraphSlam slam;

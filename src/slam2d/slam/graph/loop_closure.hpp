@@ -28,7 +28,9 @@
 // added without the kernel and bends the whole loop. It must lie within the drift the model
 // allows between the keyframe and the chain, and is held back until a second keyframe, at least
 // confirm_min_distance away along the path, matches the old map at the pose the first closure's
-// correction predicts, both under stricter thresholds; then both edges go in together.
+// correction predicts, both under stricter thresholds; then both edges go in together. A large
+// correction whose scan sees the chain's walls from behind (MatchResult::seen_from_behind) is
+// refused; a small one is a thin wall's other face, where the map holds only the first.
 // Global search: when the local search found nothing and chains lie around the estimate whose
 // drift exceeds what the large window covers, those chains are searched by branch-and-bound over
 // a window as wide as that drift (and as many headings), coarse to fine (a coarse table first,
