@@ -160,6 +160,75 @@ TEST(OccupancyGrid, HitWinsAndEachCellIsUpdatedOncePerScan) {
   EXPECT_NEAR(fan_grid.probability(CellIndex{0, 4}), 0.7, kP);
 }
 
+// A wall along y = 1.025 m (the middle of cell row 20) seen from the origin by beams 1 degree apart
+// from `first` to `last` degrees: far out its returns lie metres apart.
+LaserScan grazing_wall(int first, int last, double wall_y = 1.025) {
+  std::vector<std::pair<double, double>> beams;
+  for (int degrees = first; degrees <= last; ++degrees) {
+    const double bearing = degrees * std::numbers::pi / 180.0;
+    beams.emplace_back(bearing, wall_y / std::sin(bearing));
+  }
+  return scan_of(beams, 80.0);
+}
+
+// Every cell of the wall's row between its farthest and nearest return: held by the surface
+// hits, unknown or free without them.
+TEST(OccupancyGrid, AGrazingWallIsAWallNotDotsABeamApart) {
+  const OccupancyGridConfig dots{.resolution = 0.05};
+  OccupancyGridConfig walls = dots;
+  walls.surface_hit_weight = 0.5;
+  const LaserScan scan = grazing_wall(4, 40);  // returns 14.7 m to 1.2 m out, 3.6 m to 4 cm apart
+  OccupancyGrid with_dots(dots);
+  OccupancyGrid with_walls(walls);
+  with_dots.integrate_scan(scan, SE2());
+  with_walls.integrate_scan(scan, SE2());
+  const int near = static_cast<int>(std::floor(1.025 / std::tan(39.0 * std::numbers::pi / 180.0) / 0.05));
+  // From the second-farthest return to the second-nearest: a surface's last step is not filled.
+  const int far = static_cast<int>(std::floor(1.025 / std::tan(5.0 * std::numbers::pi / 180.0) / 0.05));
+  int dots_occupied = 0;
+  for (int x = near; x <= far; ++x) {
+    const CellIndex cell{x, 20};
+    if (with_dots.probability(cell) > 0.5) ++dots_occupied;
+    // A hit (0.7), or half a hit's log-odds between two returns.
+    EXPECT_GE(with_walls.probability(cell), probability_from_log_odds(0.5 * logit(0.7)) - kP) << "x " << x;
+  }
+  EXPECT_LT(dots_occupied, (far - near + 1) / 4) << "the returns alone should leave most of the row open";
+  // Off the wall's row nothing is marked.
+  for (int x = near; x <= far; ++x) EXPECT_LE(with_walls.probability(CellIndex{x, 19}), 0.5);
+}
+
+// A depth edge (a near wall's end, the far wall behind it) and mixed pixels (beams alternating
+// between the two) are not surfaces: nothing is marked between their returns.
+TEST(OccupancyGrid, NoSurfaceAcrossADepthEdgeOrMixedPixels) {
+  OccupancyGridConfig config{.resolution = 0.05};
+  config.surface_hit_weight = 0.5;
+  std::vector<std::pair<double, double>> edge;
+  std::vector<std::pair<double, double>> mixed;
+  for (int degrees = 5; degrees <= 40; ++degrees) {
+    const double bearing = degrees * std::numbers::pi / 180.0;
+    const double near = 1.025 / std::sin(bearing);
+    const double far = 3.025 / std::sin(bearing);
+    edge.emplace_back(bearing, degrees < 20 ? far : near);
+    mixed.emplace_back(bearing, degrees % 2 == 0 ? far : near);
+  }
+  // The edge: no cell between the two walls' rows is marked.
+  OccupancyGrid edge_grid(config);
+  edge_grid.integrate_scan(scan_of(edge, 80.0), SE2());
+  for (int y = 21; y < 60; ++y) {
+    for (int x = 0; x <= 800; ++x) EXPECT_LE(edge_grid.probability(CellIndex{x, y}), 0.5) << x << " " << y;
+  }
+  // The mixed pixels: neighbouring returns are never on one wall, so the map is the returns' alone.
+  OccupancyGrid mixed_grid(config);
+  OccupancyGrid returns_only(OccupancyGridConfig{.resolution = 0.05});
+  mixed_grid.integrate_scan(scan_of(mixed, 80.0), SE2());
+  returns_only.integrate_scan(scan_of(mixed, 80.0), SE2());
+  for (int y = 0; y <= 70; ++y) {
+    for (int x = 0; x <= 800; ++x) {
+      EXPECT_EQ(mixed_grid.probability(CellIndex{x, y}), returns_only.probability(CellIndex{x, y})) << x << " " << y;
+    }
+  }
+}
+
 TEST(OccupancyGrid, GrowsInEveryDirection) {
   OccupancyGrid grid;  // 5 cm
   std::vector<std::pair<double, double>> beams;

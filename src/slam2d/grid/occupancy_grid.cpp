@@ -3,11 +3,14 @@
 
 #include <algorithm>
 #include <climits>
-#include <cstdint>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include "slam2d/core/error.hpp"
+#include "slam2d/core/point_cloud.hpp"
 #include "slam2d/grid/ray_casting.hpp"
 
 namespace slam2d {
@@ -48,6 +51,7 @@ OccupancyGrid::OccupancyGrid(OccupancyGridConfig config) : config_(config) {
   validate(config_);
   geometry_.resolution = config_.resolution;
   log_odds_hit_ = static_cast<float>(logit(config_.probability_hit));
+  log_odds_surface_ = static_cast<float>(config_.surface_hit_weight * logit(config_.probability_hit));
   log_odds_miss_ = static_cast<float>(logit(config_.probability_miss));
   log_odds_min_ = static_cast<float>(logit(config_.probability_min));
   log_odds_max_ = static_cast<float>(logit(config_.probability_max));
@@ -73,10 +77,13 @@ void OccupancyGrid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot
   box.extend(start);
   const std::vector<Ray> rays = cast_rays(scan, T_map_sensor, start, box);
   if (rays.empty()) return;
+  // Between two end points, so inside `box`.
+  const std::vector<CellIndex> surface =
+      config_.surface_hit_weight > 0.0 ? surface_cells(scan, T_map_sensor) : std::vector<CellIndex>{};
   cells_.reserve(box);
   check(scan_count_ < UINT32_MAX, "OccupancyGrid::integrate_scan: more than 2^32 - 1 scans");
   ++scan_count_;
-  apply_hits(rays);    // first, so that a cell both hit and passed through gets the hit
+  apply_hits(rays, surface);  // first, so that a cell both hit and passed through gets the hit
   apply_misses(rays, start);
 }
 
@@ -114,17 +121,76 @@ std::vector<OccupancyGrid::Ray> OccupancyGrid::cast_rays(const LaserScan& scan, 
   return rays;
 }
 
-void OccupancyGrid::apply_hits(const std::vector<Ray>& rays) {
+// The cells between neighbouring returns on one surface. A wall seen at grazing incidence has its
+// returns a metre or more apart, and a map that holds it as dots a beam apart pins a scan taken
+// farther along to the viewpoint that drew them (its returns fall between the dots): the map
+// claims to know the open axis of a corridor. Returns of neighbouring beams i and i + 1 are one
+// surface when the step between them goes on along the line that leads up to it (the chord from up
+// to four beams before i to i) and along the one that leads away from it (from i + 1 to up to four
+// beams after): four returns or more in a line (core/point_cloud.hpp's continues_line). A depth
+// edge, a mixed pixel between two surfaces, a lone return and a surface's last step are not; a
+// doorway no beam fell into is filled, and cleared again by the beams through it. The cells are
+// inferred, not seen: they get surface_hit_weight of a hit.
+std::vector<CellIndex> OccupancyGrid::surface_cells(const LaserScan& scan, const SE2& T_map_sensor) {
+  constexpr std::size_t kReach = 4;  // beams in a chord (registration/degeneracy.cpp's too)
+  const std::vector<Eigen::Vector2d>& directions = beam_directions(scan);
+  const Eigen::Matrix2d R = T_map_sensor.rotation();
+  const Eigen::Vector2d& t = T_map_sensor.translation();
+  const double range_max = std::min(scan.range_max, config_.max_range);
+  const std::size_t n = scan.size();
+  std::vector<Eigen::Vector2d> end(n);
+  std::vector<char> valid(n, 0);
+  for (std::size_t beam = 0; beam < n; ++beam) {
+    const double range = scan.ranges[beam];
+    if (!std::isfinite(range) || range < scan.range_min || range <= 0.0 || range >= range_max) continue;
+    end[beam] = t + R * (range * directions[beam]);  // as cast_rays
+    valid[beam] = 1;
+  }
+  // The unit direction of the chord ending at `to` from the farthest valid return up to kReach
+  // beams away in direction `side` (-1 before, +1 after), through valid returns only; none when
+  // its neighbour is missing.
+  const auto chord = [&](std::size_t to, int side) -> std::optional<Eigen::Vector2d> {
+    std::size_t from = to;
+    for (std::size_t k = 1; k <= kReach; ++k) {
+      const std::ptrdiff_t b = static_cast<std::ptrdiff_t>(to) + side * static_cast<std::ptrdiff_t>(k);
+      if (b < 0 || b >= static_cast<std::ptrdiff_t>(n) || !valid[static_cast<std::size_t>(b)]) break;
+      from = static_cast<std::size_t>(b);
+    }
+    const Eigen::Vector2d d = end[to] - end[from];
+    if (from == to || d.norm() < 1e-9) return std::nullopt;
+    return d.normalized();
+  };
+  std::vector<CellIndex> cells;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (!valid[i] || !valid[i + 1]) continue;
+    const CellIndex a = geometry_.cell_of(end[i]);
+    const CellIndex b = geometry_.cell_of(end[i + 1]);
+    if (std::max(std::abs(a.x - b.x), std::abs(a.y - b.y)) <= 1) continue;  // nothing between them
+    const Eigen::Vector2d step = end[i + 1] - end[i];
+    const std::optional<Eigen::Vector2d> before = chord(i, -1);
+    const std::optional<Eigen::Vector2d> after = chord(i + 1, +1);
+    if (!(before && continues_line(*before, step) && after && continues_line(*after, -step))) continue;
+    for_each_cell_before(a, b, [&](CellIndex cell) {
+      if (cell != a) cells.push_back(cell);
+    });
+  }
+  return cells;
+}
+
+void OccupancyGrid::apply_hits(const std::vector<Ray>& rays, const std::vector<CellIndex>& surface) {
   TileCursor cursor(cells_);
   CellBox touched;
-  for (const Ray& ray : rays) {
-    if (!ray.hit) continue;
-    OccupancyCell& cell = cursor(ray.end);
-    if (cell.last_scan == scan_count_) continue;
-    cell.log_odds = std::clamp(cell.log_odds + log_odds_hit_, log_odds_min_, log_odds_max_);  // Table 9.1, line 4
+  const auto hit = [&](CellIndex index, float log_odds) {
+    OccupancyCell& cell = cursor(index);
+    if (cell.last_scan == scan_count_) return;
+    cell.log_odds = std::clamp(cell.log_odds + log_odds, log_odds_min_, log_odds_max_);  // Table 9.1, line 4
     cell.last_scan = scan_count_;
-    touched.extend(ray.end);
+    touched.extend(index);
+  };
+  for (const Ray& ray : rays) {
+    if (ray.hit) hit(ray.end, log_odds_hit_);
   }
+  for (const CellIndex cell : surface) hit(cell, log_odds_surface_);
   cells_.mark_touched(touched);
 }
 

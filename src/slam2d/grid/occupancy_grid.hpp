@@ -35,6 +35,10 @@ struct OccupancyGridConfig {
   // (Cartographer's missing_data_ray_length is 5 m too).
   double max_clear_range = 5.0;
   double max_range = 100.0;
+  // Neighbouring returns on one surface mark the cells between them too, with this share of a
+  // hit's log-odds (OccupancyGrid::integrate_scan); 0, the textbook model, turns it off. The RBPF's
+  // maps have it at 0.5; Hector's an option (docs/methods/rbpf.md, "A grazing wall as a wall").
+  double surface_hit_weight = 0.0;
 };
 
 template <typename Fields>
@@ -47,6 +51,8 @@ void describe(Fields& f, OccupancyGridConfig& c) {
   f.number("max_clear_range", c.max_clear_range, "m", at_least(0),
            "no-return beams clear free space up to here and never mark");
   f.number("max_range", c.max_range, "m", greater_than(0), "returns at or beyond are treated as no-return beams");
+  f.number("surface_hit_weight", c.surface_hit_weight, "1", between(0, 1),
+           "share of a hit for the cells between neighbouring returns in a line with two more (a grazing wall, not dots a beam apart); 0: off");
 }
 
 struct OccupancyCell {
@@ -66,6 +72,9 @@ class OccupancyGrid {
   /// readings are ignored. Each cell is updated at most once per scan; a cell both hit and passed
   /// through gets the hit. The grid origin is the map frame's origin. Throws Error for a
   /// non-finite pose or scan geometry, or a pose beyond GridGeometry::kMaxCellIndex cells.
+  /// The cells between two neighbouring returns on one surface (four returns or more in a line)
+  /// get config.surface_hit_weight of a hit's log-odds, once per scan, a cell hit or passed
+  /// through keeping that.
   void integrate_scan(const LaserScan& scan, const SE2& T_map_robot);
 
   /// P(occupied) of the cell holding a map-frame point; 0.5 for unknown cells (and for points
@@ -97,13 +106,15 @@ class OccupancyGrid {
     bool hit;  // false for a no-return beam
   };
   std::vector<Ray> cast_rays(const LaserScan& scan, const SE2& T_map_sensor, CellIndex start, CellBox& box);
+  std::vector<CellIndex> surface_cells(const LaserScan& scan, const SE2& T_map_sensor);
   const std::vector<Eigen::Vector2d>& beam_directions(const LaserScan& scan);
-  void apply_hits(const std::vector<Ray>& rays);
+  void apply_hits(const std::vector<Ray>& rays, const std::vector<CellIndex>& surface);
   void apply_misses(const std::vector<Ray>& rays, CellIndex start);
 
   OccupancyGridConfig config_;
   GridGeometry geometry_;
   float log_odds_hit_;
+  float log_odds_surface_;
   float log_odds_miss_;
   float log_odds_min_;
   float log_odds_max_;

@@ -151,7 +151,7 @@ ScanGeometry scan_geometry(const std::vector<Eigen::Vector2d>& points_in_beam_or
       if (!surface(runs[next])) continue;
       const Eigen::Vector2d along = (p[last] - p[std::max(first, last >= kReach ? last - kReach : 0)]).normalized();
       const Eigen::Vector2d step = p[runs[next].first] - p[last];
-      if (std::abs(perpendicular(along).dot(step)) > 0.05 + 0.02 * step.norm()) ++geometry.edges;
+      if (!continues_line(along, step)) ++geometry.edges;
       break;
     }
   }

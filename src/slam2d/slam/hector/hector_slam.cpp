@@ -44,6 +44,8 @@ LaserScan levelled_scan(const LaserScan& scan, const Attitude& attitude) {
 MapPyramidConfig map_config(const HectorSlamConfig& config) {
   MapPyramidConfig map = config.map;
   map.grid.max_range = config.max_range;
+  // Without the odometry prior nothing else holds a corridor's open axis: its walls stay dots.
+  if (config.prior != MotionPrior::kOdometry) map.grid.surface_hit_weight = 0.0;
   return map;
 }
 

@@ -46,7 +46,10 @@ constexpr auto choices(MotionPrior) {
 struct HectorSlamConfig {
   // The map pyramid: 3 levels from 5 cm; Hector's update factors p_hit 0.9 / p_miss 0.4. No-return
   // beams clear nothing (max_clear_range 0), as in Hector. Its grid.max_range is ignored: the map
-  // takes max_range below, so matching and mapping use one usable range.
+  // takes max_range below, so matching and mapping use one usable range. A grazing wall's returns
+  // mark no cells between them (grid.surface_hit_weight 0, an option, used only with the odometry
+  // prior: without it the wall's dots are all that holds a corridor's open axis;
+  // docs/methods/hector.md, "A grazing wall as a wall").
   MapPyramidConfig map{.levels = 3,
                        .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.4,
                                 .probability_min = 0.12, .probability_max = 0.97, .max_clear_range = 0.0}};

@@ -49,10 +49,13 @@ struct RbpfConfig {
   // 6.9, reached after 4 hits) lets a wall seen many times survive about 21 passes of a drifted
   // particle's beams, so the old map can still pull the particle back when it returns, while a
   // cell hit once (a moving object, an early mis-registration) is erased after 7 passes. p_miss
-  // and the clamp were picked on ACES and Intel, checked on FR079 (docs/defaults.md).
+  // and the clamp were picked on ACES and Intel, checked on FR079 (docs/defaults.md). A grazing
+  // wall's returns mark the cells between them at half a hit (grid.surface_hit_weight;
+  // docs/methods/rbpf.md, "A grazing wall as a wall").
   MapPyramidConfig map{.levels = 3,
                        .grid = {.resolution = 0.05, .probability_hit = 0.9, .probability_miss = 0.42,
-                                .probability_min = 0.12, .probability_max = 0.999, .max_clear_range = 0.0}};
+                                .probability_min = 0.12, .probability_max = 0.999, .max_clear_range = 0.0,
+                                .surface_hit_weight = 0.5}};
   RbpfProposalConfig proposal{};
   RbpfMotionNoise motion{};
   double min_range = 0.1;
