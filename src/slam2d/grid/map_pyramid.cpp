@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "slam2d/core/error.hpp"
 
@@ -19,7 +20,12 @@ MapPyramid::MapPyramid(const MapPyramidConfig& config) : config_(config) {
 }
 
 void MapPyramid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot) {
-  for (OccupancyGrid& grid : grids_) grid.integrate_scan(scan, T_map_robot);
+  // The surface steps do not depend on the resolution: found once, on the finest level.
+  std::vector<OccupancyGrid::SurfaceStep> steps;
+  if (config_.grid.surface_hit_weight > 0.0 && T_map_robot.vector().allFinite()) {
+    steps = grids_.front().surface_steps(scan, T_map_robot * scan.T_robot_sensor);
+  }
+  for (OccupancyGrid& grid : grids_) grid.integrate_scan(scan, T_map_robot, steps);
 }
 
 const OccupancyGrid& MapPyramid::level(int k) const {

@@ -63,6 +63,12 @@ double OccupancyGrid::probability(CellIndex cell) const {
 }
 
 void OccupancyGrid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot) {
+  const bool surfaces = config_.surface_hit_weight > 0.0 && T_map_robot.vector().allFinite();
+  integrate_scan(scan, T_map_robot,
+                 surfaces ? surface_steps(scan, T_map_robot * scan.T_robot_sensor) : std::vector<SurfaceStep>{});
+}
+
+void OccupancyGrid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot, const std::vector<SurfaceStep>& steps) {
   check(T_map_robot.vector().allFinite(), "OccupancyGrid::integrate_scan: non-finite robot pose");
   check(std::isfinite(scan.angle_min) && std::isfinite(scan.angle_increment),
         "OccupancyGrid::integrate_scan: non-finite scan angles");
@@ -78,8 +84,7 @@ void OccupancyGrid::integrate_scan(const LaserScan& scan, const SE2& T_map_robot
   const std::vector<Ray> rays = cast_rays(scan, T_map_sensor, start, box);
   if (rays.empty()) return;
   // Between two end points, so inside `box`.
-  const std::vector<CellIndex> surface =
-      config_.surface_hit_weight > 0.0 ? surface_cells(scan, T_map_sensor) : std::vector<CellIndex>{};
+  const std::vector<CellIndex> surface = config_.surface_hit_weight > 0.0 ? surface_cells(steps) : std::vector<CellIndex>{};
   cells_.reserve(box);
   check(scan_count_ < UINT32_MAX, "OccupancyGrid::integrate_scan: more than 2^32 - 1 scans");
   ++scan_count_;
@@ -131,7 +136,7 @@ std::vector<OccupancyGrid::Ray> OccupancyGrid::cast_rays(const LaserScan& scan, 
 // edge, a mixed pixel between two surfaces, a lone return and a surface's last step are not; a
 // doorway no beam fell into is filled, and cleared again by the beams through it. The cells are
 // inferred, not seen: they get surface_hit_weight of a hit.
-std::vector<CellIndex> OccupancyGrid::surface_cells(const LaserScan& scan, const SE2& T_map_sensor) {
+std::vector<OccupancyGrid::SurfaceStep> OccupancyGrid::surface_steps(const LaserScan& scan, const SE2& T_map_sensor) {
   constexpr std::size_t kReach = 4;  // beams in a chord (registration/degeneracy.cpp's too)
   const std::vector<Eigen::Vector2d>& directions = beam_directions(scan);
   const Eigen::Matrix2d R = T_map_sensor.rotation();
@@ -160,16 +165,27 @@ std::vector<CellIndex> OccupancyGrid::surface_cells(const LaserScan& scan, const
     if (from == to || d.norm() < 1e-9) return std::nullopt;
     return d.normalized();
   };
-  std::vector<CellIndex> cells;
+  std::vector<SurfaceStep> steps;
   for (std::size_t i = 0; i + 1 < n; ++i) {
     if (!valid[i] || !valid[i + 1]) continue;
-    const CellIndex a = geometry_.cell_of(end[i]);
-    const CellIndex b = geometry_.cell_of(end[i + 1]);
-    if (std::max(std::abs(a.x - b.x), std::abs(a.y - b.y)) <= 1) continue;  // nothing between them
     const Eigen::Vector2d step = end[i + 1] - end[i];
+    // Ends within a cell along both axes lie in neighbouring cells at this and any coarser level.
+    if (std::abs(step.x()) < config_.resolution && std::abs(step.y()) < config_.resolution) continue;
     const std::optional<Eigen::Vector2d> before = chord(i, -1);
     const std::optional<Eigen::Vector2d> after = chord(i + 1, +1);
     if (!(before && continues_line(*before, step) && after && continues_line(*after, -step))) continue;
+    steps.push_back({end[i], end[i + 1]});
+  }
+  return steps;
+}
+
+// The cells strictly between each step's two end cells, on its Bresenham line.
+std::vector<CellIndex> OccupancyGrid::surface_cells(const std::vector<SurfaceStep>& steps) const {
+  std::vector<CellIndex> cells;
+  for (const SurfaceStep& step : steps) {
+    const CellIndex a = geometry_.cell_of(step.from);
+    const CellIndex b = geometry_.cell_of(step.to);
+    if (std::max(std::abs(a.x - b.x), std::abs(a.y - b.y)) <= 1) continue;  // nothing between them
     for_each_cell_before(a, b, [&](CellIndex cell) {
       if (cell != a) cells.push_back(cell);
     });

@@ -74,8 +74,21 @@ class OccupancyGrid {
   /// non-finite pose or scan geometry, or a pose beyond GridGeometry::kMaxCellIndex cells.
   /// The cells between two neighbouring returns on one surface (four returns or more in a line)
   /// get config.surface_hit_weight of a hit's log-odds, once per scan, a cell hit or passed
-  /// through keeping that.
+  /// through keeping that (surface_steps).
   void integrate_scan(const LaserScan& scan, const SE2& T_map_robot);
+
+  /// A step between neighbouring returns on one surface, in the map frame.
+  struct SurfaceStep {
+    Eigen::Vector2d from;
+    Eigen::Vector2d to;
+  };
+  /// The scan's surface steps at the sensor pose T_map_sensor: the same at any resolution, so a
+  /// map pyramid finds them once for its levels (steps within one cell of this grid's resolution
+  /// along both axes are left out: no level has a cell between their ends).
+  std::vector<SurfaceStep> surface_steps(const LaserScan& scan, const SE2& T_map_sensor);
+  /// integrate_scan with the scan's surface steps already found (by any grid with this one's
+  /// max_range and a resolution no coarser; ignored where surface_hit_weight is 0).
+  void integrate_scan(const LaserScan& scan, const SE2& T_map_robot, const std::vector<SurfaceStep>& steps);
 
   /// P(occupied) of the cell holding a map-frame point; 0.5 for unknown cells (and for points
   /// that are not finite or lie beyond GridGeometry::kMaxCellIndex cells).
@@ -106,7 +119,7 @@ class OccupancyGrid {
     bool hit;  // false for a no-return beam
   };
   std::vector<Ray> cast_rays(const LaserScan& scan, const SE2& T_map_sensor, CellIndex start, CellBox& box);
-  std::vector<CellIndex> surface_cells(const LaserScan& scan, const SE2& T_map_sensor);
+  std::vector<CellIndex> surface_cells(const std::vector<SurfaceStep>& steps) const;
   const std::vector<Eigen::Vector2d>& beam_directions(const LaserScan& scan);
   void apply_hits(const std::vector<Ray>& rays, const std::vector<CellIndex>& surface);
   void apply_misses(const std::vector<Ray>& rays, CellIndex start);
