@@ -81,7 +81,8 @@ struct HectorMatcherConfig {
   // viewpoint (the hospital world: the RBPF stood still for 8 scans at a time). The guess (the
   // prediction) keeps that direction. Scans of the three public logs never fall below 0.01
   // (Intel's lowest 0.02, ACES's 0.04, FR079's 0.12; the hospital world's plain corridor
-  // 0.003-0.006). 0 disables it (Hector, graph SLAM's tracker; the RBPF: 0.01, docs/defaults.md).
+  // 0.003-0.006). 0 disables it (the matcher's default; Hector, graph SLAM's tracker and the RBPF use
+  // 0.01: docs/defaults.md).
   double scan_degeneracy_ratio = 0.0;  // 1, in [0, 1)
 };
 

@@ -46,8 +46,8 @@ HectorSlamConfig default_tracking_config() {
   config.prior_information_rotation = 300.0;     // odometry is Hector's: map_job), sigma 0.1 m, 0.058 rad
   config.prior_sigma_per_metre = 0.0;            // for every increment,
   config.prior_at_catch_ups = true;              // catch-ups included (degraded acapulco: 0.43 m, 1.00 without)
-  config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands,
-  config.matcher.scan_degeneracy_ratio = 0.01;   // also where only the map's far dots would pin it
+  config.matcher.degeneracy_ratio = 0.01;        // along a corridor's axis the prediction stands
+                                                 // (and where only the map's far dots would pin it: Hector's)
   config.odometry_guard.confirm_burst = 0.0;     // the kernel already yields to the scans (below)
   config.odometry_calibration.window = 1000.0;   // and the odometry's systematic error, by what of it
   config.odometry_calibration.significance = 5.0;  // stands out of five standard errors
