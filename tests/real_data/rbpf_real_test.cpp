@@ -53,7 +53,11 @@ double aces_short_error_under(const std::filesystem::path& data, const std::stri
 // in the step, spread the particles over metres and radians, and a drawn heading won (1.28 m over
 // all relations, the odometry alone 0.60 m). With the noise capped at a 2 m step's
 // (RbpfMotionNoise::max_sigma_translation, max_sigma_rotation) the filter keeps the odometry's
-// heading across the gap and is better than its odometry (measured 0.21 m).
+// heading across the gap and is better than its odometry (measured 0.21 m). The cap is measured
+// with the fixed motion noise along the travel too (RbpfConfig::motion_along_from_learnt_noise
+// false): with the learnt one this seed loses ACES's loop after the gap (0.587 m against the
+// odometry's 0.597; seeds 1-3 with the relocalization, `slam2d map`'s default, 0.53 / 0.23 / 0.54 m
+// against 0.27 / 0.50 / 0.54 with the fixed noise), the filter's lottery, not the cap's case.
 TEST(RbpfRealData, AGapInTheScansDoesNotLeaveTheFilterWorseThanItsOdometry) {
   SLAM2D_REQUIRE_REAL_DATA(data);
   const std::vector<LaserMessage> scans =
@@ -68,6 +72,7 @@ TEST(RbpfRealData, AGapInTheScansDoesNotLeaveTheFilterWorseThanItsOdometry) {
   };
   RbpfConfig capped_config;
   capped_config.relocalization.enabled = false;  // the gap crossed as one long step: the cap's case
+  capped_config.motion_along_from_learnt_noise = false;
   RbpfConfig uncapped = capped_config;
   uncapped.motion.max_sigma_translation = uncapped.motion.max_sigma_rotation = 1000.0;
   const double odometry_error = relation_error(odometry, relations).translation.mean;

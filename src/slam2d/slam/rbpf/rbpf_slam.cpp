@@ -119,7 +119,7 @@ bool RbpfSlam::update_particle(std::size_t i, const LaserScan& scan, const std::
   RbpfParticle& particle = particles_[i];
   Rng rng = stream(config_.seed, stats_.updates, i);
   SE2 predicted = particle.T_map_robot * u;
-  const Eigen::Vector3d sigmas = update_sigmas(u, config_.motion);
+  const Eigen::Vector3d sigmas = particle_motion_sigmas(u);
   if (config_.start_noise > 0.0 && stats_.updates > 1) {
     // GMapping's drawFromMotion before the scan matching: each particle starts its match from its
     // own draw of the motion model, so the particles explore different poses and one of them can
@@ -281,6 +281,18 @@ bool RbpfSlam::odometry_refutes_matches(const SE2& corrected) const {
 Eigen::Vector3d RbpfSlam::scan_odometry_sigmas(const SE2& delta) const {
   if (!config_.scan_odometry_prior_from_motion_noise) return motion_sigmas(delta, config_.motion);
   return scan_odometry_noise_.covariance(delta).diagonal().cwiseSqrt();
+}
+
+// The motion model's sigmas of the update's increment `u` (x along the travel, y sideways, theta):
+// motion's, with the one along the travel from the learnt odometry noise model where it is learnt
+// (config.motion_along_from_learnt_noise) and below motion's, not under motion's floor.
+Eigen::Vector3d RbpfSlam::particle_motion_sigmas(const SE2& u) const {
+  Eigen::Vector3d sigmas = update_sigmas(u, config_.motion);
+  if (config_.motion_along_from_learnt_noise && config_.scan_matched_odometry && config_.scan_odometry_prior_from_motion_noise) {
+    const double along = scan_odometry_noise_.translation_scale() * scan_odometry_noise_.sigma_translation(u);
+    sigmas.x() = std::clamp(along, config_.motion.min_sigma_translation, sigmas.x());
+  }
+  return sigmas;
 }
 
 // The odometry's noise learnt from a trusted increment and the matched motion since the previous
