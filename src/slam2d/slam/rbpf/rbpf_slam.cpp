@@ -289,8 +289,7 @@ Eigen::Vector3d RbpfSlam::scan_odometry_sigmas(const SE2& delta) const {
 Eigen::Vector3d RbpfSlam::particle_motion_sigmas(const SE2& u) const {
   Eigen::Vector3d sigmas = update_sigmas(u, config_.motion);
   if (config_.motion_along_from_learnt_noise && config_.scan_matched_odometry && config_.scan_odometry_prior_from_motion_noise) {
-    const double along = scan_odometry_noise_.translation_scale() * scan_odometry_noise_.sigma_translation(u);
-    sigmas.x() = std::clamp(along, config_.motion.min_sigma_translation, sigmas.x());
+    sigmas.x() = std::clamp(scan_odometry_sigmas(u).x(), config_.motion.min_sigma_translation, sigmas.x());
   }
   return sigmas;
 }
