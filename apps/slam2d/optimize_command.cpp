@@ -2,9 +2,10 @@
 // slam2d optimize GRAPH --out OUT: sparse pose adjustment (Konolige et al. 2010,
 // src/slam2d/optim/sparse_pose_adjustment.hpp) of a g2o or TORO pose graph from its own initial
 // guess or from an estimate of the edges alone (optim/initial_guess.hpp), whichever scores the
-// lower chi2 (--initial), plain or with a robust kernel on the loop edges (--robust; tls by
-// graduated non-convexity), reporting the loop edges kept (and, where the false ones are known,
-// precision and recall); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
+// lower chi2 (--initial), behind the loop edges' consistency gate (--gate pairs, the default:
+// src/slam2d/optim/loop_consistency.hpp), plain or with a robust kernel on the loop edges (--robust;
+// tls by graduated non-convexity), reporting the loop edges kept (and, where the false ones are
+// known, precision and recall); the output format follows OUT's extension (.g2o or .graph, optionally .gz).
 
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include "run_stats.hpp"
 #include "slam2d/core/error.hpp"
 #include "slam2d/io/pose_graph_io.hpp"
+#include "slam2d/optim/loop_consistency.hpp"
 #include "slam2d/optim/pose_graph.hpp"
 #include "slam2d/optim/sparse_pose_adjustment.hpp"
 
@@ -32,6 +34,7 @@ struct OptimizeOptions {
   InitialGuessChoice initial = InitialGuessChoice::kBetter;
   RobustKernelType robust = RobustKernelType::kNone;
   std::optional<double> robust_scale;  // unset: default_scale(robust)
+  LoopConsistencyConfig gate;
   long long outliers_from = -1;  // edges from this index on are known false (slam2d spoil's first_false_edge)
   bool json = false;
   bool quiet = false;
@@ -81,7 +84,8 @@ void run_optimize(const OptimizeOptions& options) {
   for (PoseGraphEdge& edge : graph.edges) edge.robust = std::abs(edge.to - edge.from) > 1;  // loop edges
 
   const RunClock clock;
-  const StartedOptimization started = optimize_pose_graph(graph, config, options.initial);
+  const GatedOptimization gated = optimize_gated(graph, config, options.initial, options.gate);
+  const StartedOptimization& started = gated.optimization;
   const SparsePoseAdjustmentResult& result = started.result;
   const double cpu = clock.cpu_seconds();
   const double wall = clock.wall_seconds();
@@ -100,6 +104,12 @@ void run_optimize(const OptimizeOptions& options) {
   summary.add("iterations", result.iterations).add("converged", result.converged);
   if (options.robust == RobustKernelType::kTls) summary.add("gnc_rounds", result.rounds);
   add_loop_edge_choice(summary, graph, result.edge_weights, options);
+  summary.add("gate", options.gate.enabled ? "pairs" : "none");
+  if (options.gate.enabled) {
+    summary.add("loop_edges_supported", gated.supported).add("loop_edges_admitted", gated.admitted);
+    summary.add("loop_edges_refused", gated.refused).add("gate_rounds", gated.admission_rounds);
+    summary.add("covariance_tests", gated.covariance_tests).add("gate_decided", gated.decided);
+  }
   summary.add("cpu_s", cpu).add("wall_s", wall).add("output", options.out);
   std::fputs(options.json ? summary.dump().c_str() : summary.text().c_str(), stdout);
 }
@@ -129,6 +139,15 @@ void add_optimize_command(CLI::App& app) {
   command->add_option("--robust-scale", options->robust_scale,
                       "The kernel's scale k in sqrt(chi2) units (dcs: Phi = k^2; tls: the threshold c); default 1, "
                       "tls 2 (docs/methods/sparse_pose_adjustment.md, \"Graduated non-convexity\")")
+      ->check(CLI::PositiveNumber);
+  command->add_option("--gate", options->gate.enabled,
+                      "Loop edges first gated by pairwise consistency (pairs): a closure joins the back end when another "
+                      "near it along the chain agrees with it through the chain, or when the optimum of those agrees with "
+                      "it (docs/methods/sparse_pose_adjustment.md, \"The consistency gate\"); none: every edge")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, bool>{{"pairs", true}, {"none", false}}))
+      ->default_str("pairs");
+  command->add_option("--gate-window", options->gate.window, "Nodes along the chain within which two closures' ends are compared")
+      ->capture_default_str()
       ->check(CLI::PositiveNumber);
   command->add_option("--outliers-from", options->outliers_from,
                       "The edges from this index on (in file order) are false closures, as slam2d spoil's "

@@ -169,7 +169,8 @@ std::string three_laps() {
 }
 
 // GNC over the truncated cost (--robust tls) keeps every true loop edge and no false one of a
-// graph with a third of its loop edges false; plain least squares keeps them all (precision 0.7).
+// graph with a third of its loop edges false; plain least squares keeps them all (precision 0.7);
+// the default, least squares behind the consistency gate, keeps the true ones alone.
 TEST(OptimizeCli, GraduatedNonConvexityRejectsTheFalseClosures) {
   TempDir dir;
   const std::string input = write_file(dir, "laps.g2o", three_laps());
@@ -182,16 +183,21 @@ TEST(OptimizeCli, GraduatedNonConvexityRejectsTheFalseClosures) {
     return run_command(slam2d("optimize --json " + robust + " --outliers-from " + std::to_string(int(first_false)) +
                               " " + spoiled + " --out " + dir.file("out.g2o")));
   };
-  const CommandResult tls = optimize("--robust gnc --robust-scale 1");
+  const CommandResult tls = optimize("--robust gnc --robust-scale 1 --gate none");
   ASSERT_EQ(tls.exit_code, 0) << tls.errors;
   EXPECT_EQ(json_number(tls.output, "precision"), 1.0) << tls.output;
   EXPECT_EQ(json_number(tls.output, "recall"), 1.0) << tls.output;
   EXPECT_GE(json_number(tls.output, "gnc_rounds").value_or(0.0), 1.0) << tls.output;
   EXPECT_NE(tls.output.find("\"robust\": \"tls\""), std::string::npos) << tls.output;  // gnc names tls
-  const CommandResult plain = optimize("--robust none");
+  const CommandResult plain = optimize("--robust none --gate none");
   ASSERT_EQ(plain.exit_code, 0) << plain.errors;
   EXPECT_LT(json_number(plain.output, "precision").value_or(1.0), 0.8) << plain.output;
   EXPECT_EQ(json_number(plain.output, "recall"), 1.0) << plain.output;
+  const CommandResult gated = optimize("");
+  ASSERT_EQ(gated.exit_code, 0) << gated.errors;
+  EXPECT_EQ(json_number(gated.output, "precision"), 1.0) << gated.output;
+  EXPECT_EQ(json_number(gated.output, "recall"), 1.0) << gated.output;
+  EXPECT_NE(gated.output.find("\"gate\": \"pairs\""), std::string::npos) << gated.output;
   const CommandResult negative =
       run_command(slam2d("optimize --outliers-from -1 " + spoiled + " --out " + dir.file("negative.g2o")));
   EXPECT_NE(negative.exit_code, 0);

@@ -456,6 +456,35 @@ TEST(SparsePoseAdjustment, BadGraphsAndConfigsAreErrors) {
                Error);
 }
 
+// An edge joined at the optimum: the chi2 predicted from the poses' covariance is the chi2 the
+// optimum gains when the edge is added and the graph optimised again (first order: within 3 % for
+// a closure 0.3 m and 0.1 rad off), well below the edge's own e^T Omega e at the old poses, and the
+// predicted largest move of a node is the move the optimisation makes.
+TEST(SparsePoseAdjustment, ThePredictedJoinIsWhatTheOptimumGains) {
+  Rng rng(21);
+  TruthGraph laps = make_laps(3, rng);
+  SparsePoseAdjustment spa;
+  spa.optimize(laps.graph);
+  const PoseGraphEdge candidate =
+      make_edge(5, 70, laps.truth[5].between(laps.truth[70]) * SE2(0.3, -0.2, 0.1), random_information(rng), true);
+  const std::vector<PredictedJoin> predicted = spa.predicted_joins(laps.graph, {candidate});
+  ASSERT_EQ(predicted.size(), 1u);
+  PoseGraph joined = laps.graph;
+  joined.edges.push_back(candidate);
+  const SparsePoseAdjustmentResult result = optimize_pose_graph(joined);
+  EXPECT_GT(result.final_chi2, 5.0);
+  EXPECT_NEAR(predicted[0].chi2, result.final_chi2, 0.03 * result.final_chi2);
+  EXPECT_GT(squared_error(candidate, laps.graph.poses), 2.0 * predicted[0].chi2);
+  double moved = 0.0, turned = 0.0;
+  for (std::size_t k = 0; k < joined.size(); ++k) {
+    moved = std::max(moved, (joined.poses[k].translation() - laps.graph.poses[k].translation()).norm());
+    turned = std::max(turned, std::abs(angle_difference(joined.poses[k].theta(), laps.graph.poses[k].theta())));
+  }
+  EXPECT_NEAR(predicted[0].max_translation, moved, 0.1 * moved);
+  EXPECT_NEAR(predicted[0].max_turn, turned, 0.1 * turned);
+  EXPECT_THROW(spa.predicted_joins(laps.graph, {make_edge(0, 1000)}), Error);
+}
+
 TEST(SparsePoseAdjustment, MaxIterationsStopsEarly) {
   Rng rng(4);
   TruthGraph laps = make_laps(2, rng);

@@ -192,6 +192,68 @@ struct SparsePoseAdjustment::Solver {
     return step_valid;
   }
 
+  /// For each candidate edge, e^T (Omega^-1 + J H^-1 J^T)^-1 e at the graph's poses, H the
+  /// undamped Gauss-Newton matrix of the graph's edges (the poses' covariance); e^T Omega e where
+  /// H cannot be factorised.
+  std::vector<PredictedJoin> predicted_joins(const PoseGraph& graph, const RobustKernel& kernel,
+                                             const std::vector<PoseGraphEdge>& candidates) {
+    std::vector<PredictedJoin> result(candidates.size());
+    for (std::size_t c = 0; c < candidates.size(); ++c) result[c].chi2 = squared_error(candidates[c], graph.poses);
+    prepare(graph);
+    if (columns == 0 || candidates.empty()) return result;
+    linearize(graph, kernel);
+    std::copy(hessian.begin(), hessian.end(), static_cast<double*>(matrix->x));
+    cholmod_factorize(matrix, factor, &common);
+    check(common.status != CHOLMOD_OUT_OF_MEMORY, "sparse pose adjustment: out of memory");
+    if (common.status == CHOLMOD_NOT_POSDEF || factor->minor < factor->n) return result;
+    constexpr std::size_t kBatch = 32;  // candidates per solve (3 right-hand sides each)
+    const std::size_t n = static_cast<std::size_t>(dimension());
+    cholmod_dense* rhs = cholmod_zeros(n, 3 * kBatch, CHOLMOD_REAL, &common);
+    check(rhs != nullptr, "sparse pose adjustment: out of memory");
+    for (std::size_t first = 0; first < candidates.size(); first += kBatch) {
+      const std::size_t count = std::min(kBatch, candidates.size() - first);
+      Eigen::Map<Eigen::MatrixXd> B(static_cast<double*>(rhs->x), static_cast<Eigen::Index>(n), 3 * kBatch);
+      B.setZero();
+      std::vector<std::array<Eigen::Matrix3d, 2>> jacobians(count);
+      std::vector<Eigen::Vector3d> errors(count);
+      for (std::size_t m = 0; m < count; ++m) {
+        const PoseGraphEdge& edge = candidates[first + m];
+        errors[m] = edge_error(edge, graph.poses[edge.from], graph.poses[edge.to], &jacobians[m][0], &jacobians[m][1]);
+        const std::array<int, 2> nodes{edge.from, edge.to};
+        for (int side = 0; side < 2; ++side) {
+          const int column = column_of_node[static_cast<std::size_t>(nodes[side])];
+          if (column >= 0) B.block<3, 3>(3 * column, 3 * static_cast<Eigen::Index>(m)) += jacobians[m][side].transpose();
+        }
+      }
+      cholmod_dense* solved = cholmod_solve(CHOLMOD_A, factor, rhs, &common);
+      check(solved != nullptr, "sparse pose adjustment: CHOLMOD solve failed");
+      const Eigen::Map<const Eigen::MatrixXd> X(static_cast<const double*>(solved->x), static_cast<Eigen::Index>(n), 3 * kBatch);
+      for (std::size_t m = 0; m < count; ++m) {
+        const PoseGraphEdge& edge = candidates[first + m];
+        Eigen::Matrix3d M = Eigen::Matrix3d::Zero();  // J H^-1 J^T
+        const std::array<int, 2> nodes{edge.from, edge.to};
+        for (int side = 0; side < 2; ++side) {
+          const int column = column_of_node[static_cast<std::size_t>(nodes[side])];
+          if (column >= 0) M += jacobians[m][side] * X.block<3, 3>(3 * column, 3 * static_cast<Eigen::Index>(m));
+        }
+        // (Omega^-1 + M)^-1 = (I + Omega M)^-1 Omega: no inverse of a semi-definite Omega.
+        const Eigen::Vector3d y = (Eigen::Matrix3d::Identity() + edge.information * M).fullPivLu().solve(edge.information * errors[m]);
+        PredictedJoin& join = result[first + m];
+        join.chi2 = errors[m].dot(y);
+        // The step that joining would take, H^-1 J^T (Omega^-1 + M)^-1 e = X y (first order).
+        join.max_translation = join.max_turn = 0.0;
+        for (int column = 0; column < columns; ++column) {
+          const Eigen::Vector3d step = X.block<3, 3>(3 * column, 3 * static_cast<Eigen::Index>(m)) * y;
+          join.max_translation = std::max(join.max_translation, step.head<2>().norm());
+          join.max_turn = std::max(join.max_turn, std::abs(step.z()));
+        }
+      }
+      cholmod_free_dense(&solved, &common);
+    }
+    cholmod_free_dense(&rhs, &common);
+    return result;
+  }
+
   /// The cost at x + dx (into `candidate`) for the damping lambda; infinite when the damped
   /// system cannot be solved.
   Cost try_step(const PoseGraph& graph, double lambda, const RobustKernel& kernel) {
@@ -434,6 +496,15 @@ SparsePoseAdjustmentResult SparsePoseAdjustment::optimize(PoseGraph& graph, doub
   result.edge_weights = edge_weights(graph, config_.loop_kernel);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+std::vector<PredictedJoin> SparsePoseAdjustment::predicted_joins(const PoseGraph& graph,
+                                                                 const std::vector<PoseGraphEdge>& candidates) {
+  check_graph(graph);
+  const int nodes = static_cast<int>(graph.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k) check_edge(candidates[k], k, nodes);
+  if (!solver_) solver_ = std::make_unique<Solver>();
+  return solver_->predicted_joins(graph, config_.loop_kernel, candidates);
 }
 
 SparsePoseAdjustmentResult optimize_pose_graph(PoseGraph& graph, const SparsePoseAdjustmentConfig& config) {

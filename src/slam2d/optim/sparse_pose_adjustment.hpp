@@ -69,6 +69,16 @@ struct SparsePoseAdjustmentResult {
 /// Throws Error for out-of-range values.
 void validate(const SparsePoseAdjustmentConfig& config);
 
+/// An edge joined to a graph at its optimum, to first order: e^T (Omega^-1 + J H^-1 J^T)^-1 e, the
+/// squared Mahalanobis distance of its error under its own covariance plus the poses' (H the
+/// undamped Gauss-Newton matrix of the graph's edges, the loop kernel's weights in it), which is
+/// the chi2 the optimum gains; and the largest move of a node the Gauss-Newton step would make.
+struct PredictedJoin {
+  double chi2 = 0.0;
+  double max_translation = 0.0;  // m
+  double max_turn = 0.0;         // rad
+};
+
 class SparsePoseAdjustment {
  public:
   explicit SparsePoseAdjustment(const SparsePoseAdjustmentConfig& config = {});
@@ -84,6 +94,12 @@ class SparsePoseAdjustment {
   /// optimisations between closures, whose poses only its front end reads). The tls kernel's
   /// graduated non-convexity keeps its own schedule.
   SparsePoseAdjustmentResult optimize(PoseGraph& graph, double relative_tolerance);
+
+  /// For each candidate edge (not one of the graph's), what joining it alone would do at an
+  /// optimum of the graph, to first order (PredictedJoin). Where the graph's Gauss-Newton matrix is
+  /// singular, each edge's own e^T Omega e and no step. Throws Error as optimize() does, for the
+  /// graph or a candidate.
+  std::vector<PredictedJoin> predicted_joins(const PoseGraph& graph, const std::vector<PoseGraphEdge>& candidates);
 
   const SparsePoseAdjustmentConfig& config() const { return config_; }
 
