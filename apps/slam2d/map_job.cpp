@@ -283,6 +283,7 @@ MappingRun map_with_graph(const MapJobOptions& options, const OdometryFeed& feed
   run.method_summary.add("odometry", feed.uses_odometry()).add("keyframes", stats.keyframes);
   run.method_summary.add("loop_closures", stats.loop_closures).add("near_links", stats.near_links);
   run.method_summary.add("loop_attempts", stats.loop_attempts).add("released_keyframes", stats.released_keyframes);
+  run.method_summary.add("merged_nodes", stats.merged_nodes);
   run.method_summary.add("global_searches", stats.global_searches).add("global_closures", stats.global_closures);
   run.method_summary.add("large_closures", stats.large_closures).add("unconfirmed_closures", stats.unconfirmed_closures);
   run.method_summary.add("final_search_closures", stats.final_search_closures)

@@ -19,7 +19,7 @@ namespace slam2d::cli {
 inline JsonObject odometry_report(const OdometryGuardStats& stats) {
   JsonObject report;
   report.add("odometry_stalls", stats.stalls).add("odometry_stalled_scans", stats.stalled_scans);
-  report.add("odometry_catch_ups", stats.catch_ups).add("odometry_jumps", stats.jumps);
+  report.add("odometry_catch_ups", stats.catch_ups).add("odometry_returns", stats.returns).add("odometry_jumps", stats.jumps);
   report.add("odometry_gaps", stats.gaps).add("odometry_pause_confirmations", stats.pause_confirmations);
   report.add("odometry_pause_refutations", stats.pause_refutations).add("odometry_burst_checks", stats.burst_checks);
   report.add("odometry_burst_refutations", stats.burst_refutations).add("odometry_speedless", stats.speedless);

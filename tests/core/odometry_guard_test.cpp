@@ -201,6 +201,59 @@ TEST(OdometryGuard, TheIncrementAfterAGapMayCarryTheGapsMotion) {
   EXPECT_EQ(no_gap.check(0.36, SE2(0.38, 0.0, 1.45)).fault, OdometryFault::kJump);
 }
 
+// ACES played backwards: the odometry lagged at the scan after its 3 s pause, so backwards the
+// increment before the pause turns 1.06 rad in 0.16 s (a jump) and the one across it 0.39 rad,
+// where the robot turned 1.45. The increment after the jump is the motion since the reading before
+// it, a catch-up that starts there (the jumped reading is no reference: moved is false).
+TEST(OdometryGuard, AnOdometryBackAfterAJumpIsACatchUpFromTheReadingBeforeIt) {
+  OdometryGuard guard;
+  for (int k = 0; k <= 10; ++k) guard.check(0.2 * k, SE2(0.05 * k, 0.0, 0.0));
+  const SE2 before(0.5, 0.0, 0.0);
+  const SE2 stale = before * SE2(0.38, 0.0, 1.06);
+  const SE2 after = before * SE2(0.1, 0.05, 1.45);
+  const OdometryCheck jumped = guard.check(2.16, stale);
+  EXPECT_EQ(jumped.fault, OdometryFault::kJump);
+  EXPECT_FALSE(jumped.moved);
+  const OdometryCheck back = guard.check(5.19, after);
+  EXPECT_EQ(back.fault, OdometryFault::kCatchUp);
+  EXPECT_TRUE(back.moved);
+  EXPECT_NEAR((back.increment.vector() - before.between(after).vector()).norm(), 0.0, 1e-12);
+  EXPECT_EQ(guard.stats().returns, 1u);
+  EXPECT_EQ(guard.stats().jumps, 1u);
+  // Trusted again from there on.
+  EXPECT_TRUE(guard.check(5.39, after * SE2(0.05, 0.0, 0.0)).trusted());
+
+  // A spike: one reading 0.9 m off in a stream at 10 Hz, the next back in line.
+  OdometryGuard spiked;
+  std::vector<SE2> poses = straight_drive(20, 0.5);
+  poses[10] = SE2(0.0, 0.9, 0.0) * poses[10];
+  const std::vector<OdometryCheck> checks = check_all(spiked, poses);
+  EXPECT_EQ(checks[10].fault, OdometryFault::kJump);
+  EXPECT_EQ(checks[11].fault, OdometryFault::kCatchUp);
+  EXPECT_NEAR((checks[11].increment.vector() - poses[9].between(poses[11]).vector()).norm(), 0.0, 1e-12);
+  for (int k = 12; k < 20; ++k) EXPECT_TRUE(checks[k].trusted()) << k;
+
+  // An odometry that jumped for good is not "back": its next increments are trusted as they are,
+  // and the reference moves on with them.
+  OdometryGuard jumped_for_good;
+  std::vector<SE2> shifted = straight_drive(20, 0.5);
+  for (int k = 10; k < 20; ++k) shifted[k] = SE2(0.86, 0.0, 0.85) * shifted[k];
+  const std::vector<OdometryCheck> kept = check_all(jumped_for_good, shifted);
+  EXPECT_EQ(kept[10].fault, OdometryFault::kJump);
+  for (int k = 11; k < 20; ++k) {
+    EXPECT_TRUE(kept[k].trusted()) << k;
+    EXPECT_TRUE(kept[k].moved) << k;
+  }
+  EXPECT_EQ(jumped_for_good.stats().returns, 0u);
+
+  // A restart is a new frame for good: no return to the reading before it, whatever the time.
+  OdometryGuard restarted;
+  restarted.check(0.0, SE2(1.0, 1.0, 1.0));
+  EXPECT_EQ(restarted.check(0.2, SE2()).fault, OdometryFault::kJump);
+  EXPECT_TRUE(restarted.check(3.0, SE2(1.0, 1.0, 1.0)).trusted());
+  EXPECT_EQ(restarted.stats().returns, 0u);
+}
+
 // Intel with its odometry 0.6 s ahead, compensated: across a 2.4 s pause in the stamps (really one
 // scan's time: the robot turned 0.1 rad) the odometry, interpolated along the stamps, turns 1.3 rad.
 // An increment that moved over a pause in the log's rhythm (shorter than a gap too) stays trusted

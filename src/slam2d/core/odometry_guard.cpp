@@ -49,7 +49,12 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     // How long the pose had stood still: up to this scan if it is still frozen, else up to the last.
     const double stood = (is_frozen(result.increment) ? stamp : last_stamp_) - moved_at_;
     const bool restarted = at_origin(T_odom_robot) && !at_origin(*last_pose_);
-    if (config_.enabled) result.fault = classify(result.increment, result.dt + lag_allowance_, stood, restarted);
+    // The motion since the reference: what a catch-up carries (OdometryCheck::moved).
+    const Step since_reference{reference_pose_->between(T_odom_robot), stamp - reference_stamp_ + lag_allowance_};
+    if (config_.enabled) {
+      result.fault = classify({result.increment, result.dt + lag_allowance_}, since_reference, stood, restarted);
+      if (result.fault == OdometryFault::kCatchUp) result.increment = since_reference.increment;
+    }
     result.confirm = config_.enabled && result.trusted() && is_moving(result.increment) && pauses(result.dt);
     result.burst = config_.enabled && result.trusted() && !is_moving(result.increment) && bursts(result.dt);
     remember_time_step(result.dt);
@@ -62,8 +67,14 @@ OdometryCheck OdometryGuard::check(double stamp, const SE2& T_odom_robot) {
     lag_allowance_ = result.gap ? result.dt : 0.0;
     ++stats_.checks;
   }
-  result.moved = result.first || !is_frozen(result.increment);
-  if (result.moved) moved_at_ = stamp;
+  const bool changed = result.first || !is_frozen(result.increment);
+  if (changed) moved_at_ = stamp;
+  // A jumped reading is no reference (unless the odometry restarted: then its frame is new for good).
+  result.moved = changed && !jumped_;
+  if (result.moved) {
+    reference_pose_ = T_odom_robot;
+    reference_stamp_ = stamp;
+  }
   last_pose_ = T_odom_robot;
   last_stamp_ = stamp;
   return result;
@@ -106,11 +117,15 @@ bool OdometryGuard::is_moving(const SE2& increment) const {
   return increment.translation().norm() > config_.moving_translation || std::abs(increment.theta()) > config_.moving_rotation;
 }
 
-// The state machine of the header: stall (frozen after motion) until the pose moves; a catch-up
-// when it moves after a stall, or after a rest of stall_duration or more by more than a robot
-// driving off could (it may have moved unseen); a jump when it restarted onto the origin or is
-// out of bounds.
-OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double stood, bool restarted) {
+// The state machine of the header: stall (frozen after motion) until the pose moves; the return
+// of an odometry that jumped (a catch-up from the reading before the jump) when it is back within
+// the bounds of that reading; a catch-up when it moves after a stall, or after a rest of
+// stall_duration or more by more than a robot driving off could (it may have moved unseen); a jump
+// when it restarted onto the origin or is out of bounds. `step` is the increment from the last
+// scan over its time (plus a gap's lag allowance), `since_reference` the motion since the
+// reference reading (OdometryCheck::moved) over the time since.
+OdometryFault OdometryGuard::classify(const Step& step, const Step& since_reference, double stood, bool restarted) {
+  const SE2& increment = step.increment;
   if (is_frozen(increment)) {
     // At rest "no motion" is true; and a pose repeated over less than stall_duration may be an
     // odometry slower than the scanner.
@@ -121,12 +136,21 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     return OdometryFault::kStall;
   }
   const bool moving = is_moving(increment);
-  const bool catch_up = stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, dt));
-  if (restarted || (catch_up && exceeds_bounds(increment, stood + dt))) {
+  if (jumped_ && !restarted && since_reference.dt > 0.0 && !exceeds_bounds(since_reference.increment, since_reference.dt)) {
+    jumped_ = false;
+    was_moving_ = moving;
+    ++stats_.catch_ups;
+    ++stats_.returns;
+    return OdometryFault::kCatchUp;
+  }
+  jumped_ = false;
+  const bool catch_up = stalled_ || (stood >= config_.stall_duration && exceeds_startup(increment, step.dt));
+  if (restarted || (catch_up && exceeds_bounds(since_reference.increment, since_reference.dt))) {
     // Onto the origin itself, or more than the robot could have moved since the pose last
     // changed: not motion or a catch-up but a jump (an odometry that restarted from its origin).
     stalled_ = false;
     was_moving_ = false;
+    jumped_ = !restarted;
     ++stats_.jumps;
     return OdometryFault::kJump;
   }
@@ -136,7 +160,8 @@ OdometryFault OdometryGuard::classify(const SE2& increment, double dt, double st
     ++stats_.catch_ups;
     return OdometryFault::kCatchUp;
   }
-  if (exceeds_bounds(increment, dt)) {
+  if (exceeds_bounds(increment, step.dt)) {
+    jumped_ = true;
     ++stats_.jumps;
     return OdometryFault::kJump;
   }

@@ -28,6 +28,14 @@
 //    pose last moved (OdometryCheck::moved), which is right either way. A catch-up larger than
 //    the robot could have moved since the pose last changed (the jump bounds below over that
 //    time) is a jump instead: an odometry that restarted from its origin while the robot stood.
+//  - return: the first increment that is not frozen after a jump (not a restart), when the motion
+//    from the reading before the jump is within the bounds above over the time since: the jump was
+//    a reading out of line, a spike, or a stale reading (ACES played backwards: at its 3 s pause the
+//    odometry lags, so the increment before the pause turns 1.06 rad in 0.16 s, a jump, and the one
+//    across the pause 0.39 rad where the robot turned 1.4). The increment is then a catch-up from
+//    the reading before the jump: a jumped reading is not one a catch-up starts from
+//    (OdometryCheck::moved is false there). An odometry that jumped for good fails the test and
+//    is trusted again from its next increment on.
 //  - jump: an increment beyond what the robot could have moved in the time step: more than
 //    max_speed * dt + jump_translation_slack or max_turn_rate * dt + jump_rotation_slack, with dt
 //    at least min_time_step (stamps of real logs jitter and step back, so short or negative steps
@@ -191,7 +199,8 @@ struct OdometryCheck {
   bool gap = false;                     // dt > config.gap
   bool first = false;                   // the first scan: nothing to check
   bool stall_start = false;             // the first increment of a stall
-  bool moved = false;                   // the pose changed (or the first scan): a later catch-up starts here
+  bool moved = false;                   // the pose changed (or the first scan), not by a jump: a later catch-up
+                                        // starts here (its increment is the motion since)
   bool hold_map = false;                // a stall within max_held_stall: write no map at this scan, wait for the catch-up
   bool confirm = false;                 // trusted, moved over a pause: the scans confirm it against the last pose
   bool burst = false;                   // trusted, stood within a burst: the scans confirm it against the last motion
@@ -204,6 +213,7 @@ struct OdometryGuardStats {
   std::size_t stalls = 0;          // stall episodes (runs of frozen increments after motion)
   std::size_t stalled_scans = 0;   // increments inside them
   std::size_t catch_ups = 0;
+  std::size_t returns = 0;         // of those, an odometry back after a jump (a spike or a stale reading)
   std::size_t jumps = 0;
   std::size_t gaps = 0;
   std::size_t speedless = 0;       // increments beyond the speed bounds that the stamps could not judge
@@ -228,7 +238,11 @@ class OdometryGuard {
   const OdometryGuardConfig& config() const { return config_; }
 
  private:
-  OdometryFault classify(const SE2& increment, double dt, double stood, bool restarted);
+  struct Step {
+    SE2 increment;
+    double dt = 0.0;  // s
+  };
+  OdometryFault classify(const Step& step, const Step& since_reference, double stood, bool restarted);
   bool at_origin(const SE2& T_odom_robot) const;
   bool is_frozen(const SE2& increment) const;
   bool is_moving(const SE2& increment) const;
@@ -245,6 +259,9 @@ class OdometryGuard {
   std::optional<SE2> last_pose_;
   double last_stamp_ = 0.0;
   double moved_at_ = 0.0;    // s, stamp of the last scan whose pose differed from the one before
+  std::optional<SE2> reference_pose_;  // the odometry pose at the last scan that moved (OdometryCheck::moved)
+  double reference_stamp_ = 0.0;       // s, its stamp
+  bool jumped_ = false;      // the last increment that was not frozen jumped (not a restart): the reference is before it
   bool was_moving_ = false;  // the last trusted increment moved
   bool stalled_ = false;     // inside a stall
   double lag_allowance_ = 0.0;  // s, added to the next dt: the length of a gap just passed

@@ -26,6 +26,7 @@ struct PoseGraphEdge {
   SE2 T_from_to;  // measured pose of `to` in the frame of `from`
   Eigen::Matrix3d information = Eigen::Matrix3d::Identity();  // (x, y, theta), symmetric positive definite
   bool robust = false;  // the back end's robust kernel applies (loop closures); odometry edges stay quadratic
+  bool closure = false;  // a loop closure (graph SLAM's; files do not carry it)
 };
 
 struct PoseGraph {

@@ -256,6 +256,7 @@ struct RingLaps {
   std::size_t held_after_first_lap = 0;
   std::size_t keyframes_after_first_lap = 0;
   std::size_t held_at_end = 0;
+  std::size_t live_nodes = 0;  // nodes with an edge at the end: the back end's unknowns
   double ate_rmse = 0.0;
 };
 
@@ -293,6 +294,12 @@ RingLaps drive_ring(const GraphSlamConfig& config) {
   slam.finish();
   laps.stats = slam.stats();
   laps.held_at_end = held_keyframes(slam);
+  std::vector<bool> live(slam.graph().size(), false);
+  for (const PoseGraphEdge& edge : slam.graph().edges) {
+    live[static_cast<std::size_t>(edge.from)] = true;
+    live[static_cast<std::size_t>(edge.to)] = true;
+  }
+  laps.live_nodes = static_cast<std::size_t>(std::count(live.begin(), live.end(), true));
   laps.ate_rmse = absolute_trajectory_error(slam.trajectory(), run.truth).rmse;
   return laps;
 }
@@ -312,6 +319,23 @@ TEST(GraphSlamLifelong, KeyframesHoldingDataStopGrowingAfterTheFirstLap) {
       << lifelong.held_after_first_lap << " after the first lap of " << lifelong.stats.keyframes;
   EXPECT_GT(lifelong.stats.released_keyframes, 0.6 * (lifelong.stats.keyframes - lifelong.keyframes_after_first_lap));
   EXPECT_LT(lifelong.ate_rmse, std::max(0.05, 1.2 * all.ate_rmse)) << "all kept: " << all.ate_rmse;
+}
+
+// keyframes.merge_released: a released keyframe's node merges into its witness's, so the back end's
+// unknowns stop growing after the first lap too, and the trajectory stays as good.
+TEST(GraphSlamLifelong, MergedNodesStopTheGraphGrowingAfterTheFirstLap) {
+  GraphSlamConfig merging;
+  merging.keyframes.merge_released = true;
+  const RingLaps kept = drive_ring({});
+  const RingLaps merged = drive_ring(merging);
+  EXPECT_EQ(kept.stats.merged_nodes, 0u);
+  EXPECT_EQ(kept.live_nodes, kept.stats.keyframes);
+  ASSERT_GT(merged.stats.released_keyframes, 0u);
+  EXPECT_EQ(merged.stats.merged_nodes, merged.stats.released_keyframes);
+  EXPECT_EQ(merged.live_nodes + merged.stats.merged_nodes, merged.stats.keyframes);
+  EXPECT_LT(merged.live_nodes, 1.5 * merged.keyframes_after_first_lap)
+      << merged.keyframes_after_first_lap << " after the first lap of " << merged.stats.keyframes;
+  EXPECT_LT(merged.ate_rmse, std::max(0.05, 1.2 * kept.ate_rmse)) << "every node kept: " << kept.ate_rmse;
 }
 
 // The back end's schedule: a closure that closes a new loop is optimised at once (Karto's); one

@@ -24,7 +24,7 @@ namespace slam2d {
 namespace {
 
 // The sequential and odometry edges join consecutive nodes; every other edge is a loop edge.
-bool loop_edge(const PoseGraphEdge& edge) { return edge.to != edge.from + 1; }
+bool loop_edge(const PoseGraphEdge& edge) { return edge.closure; }
 
 // Whether a global search found one of these closures (a large correction and its confirmation).
 bool found_globally(const std::vector<LoopClosure>& closures) {
@@ -374,6 +374,7 @@ void GraphSlam::record_closure(const LoopClosure& closure, bool final) {
 // is refused and remembered (the last kRememberedRefusals), its edges leave and the poses return to
 // the first optimum. Returns the closures that went in: the new ones first, then the remembered.
 std::vector<LoopClosure> GraphSlam::supported_large_closures(const std::vector<LoopClosure>& large) {
+  apply_merges();  // the edges below `edges` keep their places
   if (first_unoptimized_edge_ < graph_.edges.size()) optimize(config_.run_relative_tolerance);
   const double gate = chi_square_quantile(3.0, config_.optimize_gate_z);
   const std::size_t edges = graph_.edges.size();
@@ -485,6 +486,7 @@ void GraphSlam::try_release(std::size_t keyframe) {
       keyframe_scans_[keyframe] = {};
       keyframes_[*witness].witness = true;
       ++stats_.released_keyframes;
+      if (config_.keyframes.merge_released) pending_merges_.push_back({keyframes_[keyframe].node, keyframes_[*witness].node});
       return;
     }
   }
@@ -562,9 +564,70 @@ void GraphSlam::optimize(double relative_tolerance) {
   first_unoptimized_edge_ = graph_.edges.size();
   pending_cycle_ = 0.0;
   const SparsePoseAdjustmentResult result = back_end_.optimize(graph_, relative_tolerance);
+  follow_merges();
+  apply_merges();  // at the poses just optimised
   stats_.optimization_seconds += result.seconds;
   ++stats_.optimizations;
   stats_.optimization_iterations += static_cast<std::size_t>(result.iterations);
+}
+
+// Merged nodes (keyframes.merge_released): a released keyframe's node joins its witness's, at the
+// pose it has from it now (X_node = X_into D). Every edge at the node moves to the witness: from
+// the node, the measurement becomes D Z (the same error); to it, Z D^-1, whose error is the old one
+// carried by Ad(D^-1), so its information is Ad(D^-1)^T Omega Ad(D^-1). D is no measurement but
+// the estimate, so each moved end adds the loop closures' floor (loop_closure.match's
+// min_sigma_translation / min_sigma_rotation) to the edge's covariance. An edge between the node
+// and its witness (or another node merged there) joins a node to itself and goes. The merged node
+// keeps its index, without an edge (the back end leaves it out), and its pose follows the
+// witness's (follow_merges): the scans and the map read it as before.
+void GraphSlam::apply_merges() {
+  if (pending_merges_.empty() && merged_nodes_.empty()) return;
+  merged_.resize(graph_.poses.size());
+  for (const auto& [node, into] : pending_merges_) {
+    merged_[node] = NodeMerge{.into = into, .T_into_node = graph_.poses[into].between(graph_.poses[node])};
+    merged_nodes_.push_back(node);
+    ++stats_.merged_nodes;
+  }
+  pending_merges_.clear();
+  const MapMatchConfig& floor = config_.loop_closure.match;
+  const Covariance3 uncertainty =
+      covariance_from_sigmas(floor.min_sigma_translation, floor.min_sigma_translation, floor.min_sigma_rotation);
+  const auto widen = [&](Eigen::Matrix3d& information) {
+    const Eigen::Matrix3d widened = information * (Eigen::Matrix3d::Identity() + uncertainty * information).inverse();
+    information = 0.5 * (widened + widened.transpose());
+  };
+  std::size_t kept = 0;
+  std::size_t unoptimized = first_unoptimized_edge_;
+  for (std::size_t k = 0; k < graph_.edges.size(); ++k) {
+    PoseGraphEdge edge = graph_.edges[k];
+    if (const std::optional<NodeMerge>& merge = merged_[static_cast<std::size_t>(edge.from)]) {
+      edge.from = static_cast<int>(merge->into);
+      edge.T_from_to = merge->T_into_node * edge.T_from_to;
+      widen(edge.information);
+    }
+    if (const std::optional<NodeMerge>& merge = merged_[static_cast<std::size_t>(edge.to)]) {
+      const Eigen::Matrix3d A = merge->T_into_node.inverse().adjoint();
+      edge.to = static_cast<int>(merge->into);
+      edge.T_from_to = edge.T_from_to * merge->T_into_node.inverse();
+      edge.information = A.transpose() * edge.information * A;
+      widen(edge.information);
+    }
+    if (edge.from == edge.to) {
+      if (k < first_unoptimized_edge_) --unoptimized;
+      continue;
+    }
+    graph_.edges[kept++] = edge;
+  }
+  graph_.edges.resize(kept);
+  first_unoptimized_edge_ = unoptimized;
+}
+
+// The merged nodes' poses from their witnesses' (after the back end moved them).
+void GraphSlam::follow_merges() {
+  for (const std::size_t node : merged_nodes_) {
+    const NodeMerge& merge = *merged_[node];
+    graph_.poses[node] = graph_.poses[merge.into] * merge.T_into_node;
+  }
 }
 
 // An optimisation of the closures' neighbourhood (local_reach): the nodes within `radius` (the

@@ -226,6 +226,7 @@ struct GraphSlamStats {
   std::size_t gaps_tracked_through = 0; // ... across which the tracker kept its map (gap.track_*)
   std::size_t contradicted_large_closures = 0;  // confirmed pairs refused by the old map's free space
   std::size_t released_keyframes = 0;   // lifelong: keyframes whose points were dropped
+  std::size_t merged_nodes = 0;         // lifelong: of those, the nodes merged into their witness's
   std::size_t odometry_edges = 0;       // odometry edges beside the sequential ones
   MotionFusionStats fusion;             // the two edges of each keyframe step: consistent, or which was surer
   double optimization_seconds = 0.0;    // wall time of the back end
@@ -301,6 +302,8 @@ class GraphSlam {
   bool redundant(std::size_t keyframe, std::size_t older) const;
   void copy_loop_stats();
   void optimize(double relative_tolerance);
+  void apply_merges();
+  void follow_merges();
   void optimize_locally(double radius);
   double cycle_length(const PoseGraphEdge& edge, double reach) const;
   bool estimate_disagrees() const;
@@ -333,6 +336,14 @@ class GraphSlam {
   static constexpr std::size_t kRememberedRefusals = 8;
   std::vector<std::vector<LoopClosure>> refused_large_;
   std::size_t refused_global_closures_ = 0;  // of the refused ones, those a global search found
+  // Merged nodes (keyframes.merge_released; apply_merges): by node, the node it joined and its pose there.
+  struct NodeMerge {
+    std::size_t into = 0;
+    SE2 T_into_node;
+  };
+  std::vector<std::optional<NodeMerge>> merged_;
+  std::vector<std::size_t> merged_nodes_;                          // in the order they merged
+  std::vector<std::pair<std::size_t, std::size_t>> pending_merges_;  // (node, into) not yet applied
 };
 
 }  // namespace slam2d

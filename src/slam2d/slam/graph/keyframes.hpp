@@ -27,6 +27,11 @@ struct KeyframeConfig {
   // was chosen by leave-one-out on Intel, ACES and FR079 (docs/defaults.md).
   double redundant_radius = 0.25;
   double redundant_angle = 0.25;
+  // A released keyframe's node merges into its witness's: its edges move there (GraphSlam::
+  // apply_merges), so the graph, like the data, grows with the place and not with the time. Off by
+  // default: its poses are then held at the witness's, and later passes lose accuracy
+  // (docs/methods/graph_slam.md, "Merged nodes").
+  bool merge_released = false;
 };
 
 template <typename Fields>
@@ -37,6 +42,8 @@ void describe(Fields& f, KeyframeConfig& c) {
   f.number("redundant_radius", c.redundant_radius, "m", at_least(0),
            "lifelong: a keyframe this near an older one that keeps its points, and linked to it, drops its own; 0: off");
   f.number("redundant_angle", c.redundant_angle, "rad", at_least(0), "... and turned at most this much from it");
+  f.flag("merge_released", c.merge_released,
+         "lifelong: a released keyframe's node merges into its witness's (its edges move there); false: it stays a node");
 }
 
 /// A graph node's scan: its end points in the robot frame, with normals (from the scan order).

@@ -285,6 +285,7 @@ std::optional<LoopClosure> LoopCloser::match_chain(const std::vector<Keyframe>& 
   // The match's covariance is in the map frame; the edge's is in the anchor's frame.
   closure.edge.information = information_from_covariance(rotate_covariance(match.covariance, -T_map_anchor.theta()));
   closure.edge.robust = true;
+  closure.edge.closure = true;
   closure.score = match.score;
   closure.response = response(map, scan, match.T_target_source, match_config.correlative.sigma);
   closure.inlier_fraction = match.inlier_fraction;
