@@ -23,7 +23,8 @@ namespace slam2d {
 
 namespace {
 
-// The sequential and odometry edges join consecutive nodes; every other edge is a loop edge.
+// A loop edge is one the loop closer made (sequential and odometry edges join consecutive nodes
+// until merged nodes move them: keyframes.merge_released).
 bool loop_edge(const PoseGraphEdge& edge) { return edge.closure; }
 
 // Whether a global search found one of these closures (a large correction and its confirmation).
@@ -581,11 +582,10 @@ void GraphSlam::optimize(double relative_tolerance) {
 // keeps its index, without an edge (the back end leaves it out), and its pose follows the
 // witness's (follow_merges): the scans and the map read it as before.
 void GraphSlam::apply_merges() {
-  if (pending_merges_.empty() && merged_nodes_.empty()) return;
+  if (pending_merges_.empty() && stats_.merged_nodes == 0) return;
   merged_.resize(graph_.poses.size());
   for (const auto& [node, into] : pending_merges_) {
     merged_[node] = NodeMerge{.into = into, .T_into_node = graph_.poses[into].between(graph_.poses[node])};
-    merged_nodes_.push_back(node);
     ++stats_.merged_nodes;
   }
   pending_merges_.clear();
@@ -624,9 +624,8 @@ void GraphSlam::apply_merges() {
 
 // The merged nodes' poses from their witnesses' (after the back end moved them).
 void GraphSlam::follow_merges() {
-  for (const std::size_t node : merged_nodes_) {
-    const NodeMerge& merge = *merged_[node];
-    graph_.poses[node] = graph_.poses[merge.into] * merge.T_into_node;
+  for (std::size_t node = 0; node < merged_.size(); ++node) {
+    if (const std::optional<NodeMerge>& merge = merged_[node]) graph_.poses[node] = graph_.poses[merge->into] * merge->T_into_node;
   }
 }
 

@@ -342,7 +342,6 @@ class GraphSlam {
     SE2 T_into_node;
   };
   std::vector<std::optional<NodeMerge>> merged_;
-  std::vector<std::size_t> merged_nodes_;                          // in the order they merged
   std::vector<std::pair<std::size_t, std::size_t>> pending_merges_;  // (node, into) not yet applied
 };
 
